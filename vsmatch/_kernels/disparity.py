@@ -1,0 +1,89 @@
+import numpy as np
+from numba import njit, prange
+
+from . import KERNEL_OPTIONS
+from .arms import colour_distance
+
+VALID, OCCLUDED, MISMATCHED = 0, 1, 2
+
+
+@njit(**KERNEL_OPTIONS)
+def winner_takes_all(volume, out):
+    """Left view: out[y, x] = argmin_d volume[y, x, d] (the smallest d on ties)."""
+    height, width, n_disp = volume.shape
+    for y in prange(height):
+        for x in range(width):
+            best = 0
+            best_cost = volume[y, x, 0]
+            for d in range(1, n_disp):
+                if volume[y, x, d] < best_cost:
+                    best_cost = volume[y, x, d]
+                    best = d
+            out[y, x] = best
+
+
+@njit(**KERNEL_OPTIONS)
+def winner_takes_all_right(volume, out):
+    """Right view from the left volume: out[y, x] = argmin_d volume[y, x + d, d]."""
+    height, width, n_disp = volume.shape
+    for y in prange(height):
+        for x in range(width):
+            best = 0
+            best_cost = volume[y, x, 0]
+            for d in range(1, min(n_disp, width - x)):
+                if volume[y, x + d, d] < best_cost:
+                    best_cost = volume[y, x + d, d]
+                    best = d
+            out[y, x] = best
+
+
+@njit(**KERNEL_OPTIONS)
+def left_right_check(disp_l, disp_r, n_disp, tolerance, labels):
+    """Label each left pixel VALID, OCCLUDED (no disparity would pass) or MISMATCHED."""
+    height, width = disp_l.shape
+    for y in prange(height):
+        for x in range(width):
+            d = disp_l[y, x]
+            if x - d >= 0 and abs(d - disp_r[y, x - d]) <= tolerance:
+                labels[y, x] = VALID
+                continue
+            label = OCCLUDED
+            for dd in range(min(n_disp, x + 1)):
+                if abs(dd - disp_r[y, x - dd]) <= tolerance:
+                    label = MISMATCHED
+                    break
+            labels[y, x] = label
+
+
+@njit(**KERNEL_OPTIONS)
+def fill_rejected(disp, labels, image, steps_y, steps_x, max_search, invalid, out):
+    """Fill every non-VALID pixel from the first VALID pixel found along each direction.
+
+    Occluded pixels take the lowest candidate (the background); mismatched pixels take
+    the candidate whose colour is closest. A pixel with no candidate gets ``invalid``.
+    """
+    height, width = disp.shape
+    for y in prange(height):
+        for x in range(width):
+            label = labels[y, x]
+            if label == VALID:
+                out[y, x] = disp[y, x]
+                continue
+            best = invalid
+            best_score = np.inf
+            for k in range(steps_y.shape[0]):
+                for step in range(1, max_search + 1):
+                    yy = int(np.round(y + step * steps_y[k]))
+                    xx = int(np.round(x + step * steps_x[k]))
+                    if yy < 0 or yy >= height or xx < 0 or xx >= width:
+                        break
+                    if labels[yy, xx] == VALID:
+                        if label == OCCLUDED:
+                            score = disp[yy, xx]
+                        else:
+                            score = colour_distance(image, y, x, yy, xx)
+                        if score < best_score:
+                            best_score = score
+                            best = disp[yy, xx]
+                        break
+            out[y, x] = best

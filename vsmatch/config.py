@@ -1,0 +1,231 @@
+"""Method parameters: frozen dataclasses with defaults, YAML merged over them.
+
+Every number the method uses lives here, grouped by pipeline stage. A YAML file
+names only what it changes; unknown keys and out-of-range values are refused
+with a one-line :class:`ConfigError` that names the key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+
+class ConfigError(ValueError):
+    """A configuration that cannot be used; the message is one line."""
+
+
+def _param(default, lo=None, hi=None, *, choices=None, nullable=False):
+    """A config field with its allowed range (inclusive) or set of choices."""
+    return field(default=default, metadata={"range": (lo, hi), "choices": choices,
+                                            "nullable": nullable})
+
+
+@dataclass(frozen=True)
+class CostConfig:
+    """Matching cost (ALGORITHM.md §1–2)."""
+
+    census_width: int = _param(9, 1, 15)
+    census_height: int = _param(7, 1, 15)
+    lambda_census: float = _param(30.0, 0.01, 1000.0)
+    # None switches a term off.
+    lambda_gradient: float | None = _param(None, 0.01, 10000.0, nullable=True)
+    lambda_ad: float | None = _param(None, 0.01, 1000.0, nullable=True)
+    # Gaussian sigma applied to the grey image before Sobel and census; 0 = off.
+    presmooth_sigma: float = _param(0.0, 0.0, 5.0)
+
+
+@dataclass(frozen=True)
+class ArmsConfig:
+    """Direction-guided cross arms (ALGORITHM.md §3)."""
+
+    tau1: float = _param(20.0, 0.0, 255.0)
+    tau2: float = _param(20.0, 0.0, 255.0)
+    tau3: float = _param(6.0, 0.0, 255.0)
+    l1: int = _param(17, 1, 255)
+    l2: int = _param(34, 1, 255)
+    kappa: float = _param(0.0, -1.0, 10.0)
+    g_sat: float = _param(200.0, 1.0, 2000.0)
+
+
+@dataclass(frozen=True)
+class AggregationConfig:
+    """Support-region aggregation; 0 iterations switches it off."""
+
+    iterations: int = _param(4, 0, 16)
+
+
+@dataclass(frozen=True)
+class ConsistencyConfig:
+    """Left-right check."""
+
+    enabled: bool = _param(True)
+    tolerance: int = _param(1, 0, 16)
+
+
+@dataclass(frozen=True)
+class FillConfig:
+    """Filling of pixels rejected by the left-right check (ALGORITHM.md §4).
+
+    ``directions`` = 2 searches along the scanline only (§4); 16 is the
+    "proper interpolation" of §5.3.
+    """
+
+    enabled: bool = _param(True)
+    directions: int = _param(2, choices=(2, 8, 16))
+    max_search: int = _param(64, 1, 4096)
+
+
+@dataclass(frozen=True)
+class Config:
+    """All parameters of the method, one section per pipeline stage."""
+
+    cost: CostConfig = field(default_factory=CostConfig)
+    arms: ArmsConfig = field(default_factory=ArmsConfig)
+    aggregation: AggregationConfig = field(default_factory=AggregationConfig)
+    consistency: ConsistencyConfig = field(default_factory=ConsistencyConfig)
+    fill: FillConfig = field(default_factory=FillConfig)
+
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        return dataclasses.asdict(self)
+
+
+_SECTIONS = {f.name: f.default_factory for f in dataclasses.fields(Config)}
+
+
+def _check_value(key: str, spec: dataclasses.Field, value: Any) -> Any:
+    meta = spec.metadata
+    kind = _field_kind(spec)
+    if value is None:
+        if meta.get("nullable"):
+            return None
+        raise ConfigError(f"config value {key} must not be empty")
+    if kind is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(f"config value {key} = {value!r} must be true or false")
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError(f"config value {key} = {value!r} must be a number")
+    if kind is int:
+        if float(value) != int(value):
+            raise ConfigError(f"config value {key} = {value!r} must be a whole number")
+        value = int(value)
+    else:
+        value = float(value)
+    choices = meta.get("choices")
+    if choices is not None and value not in choices:
+        allowed = ", ".join(str(c) for c in choices)
+        raise ConfigError(f"config value {key} = {value!r} is not one of {allowed}")
+    lo, hi = meta.get("range", (None, None))
+    if (lo is not None and value < lo) or (hi is not None and value > hi):
+        raise ConfigError(f"config value {key} = {value!r} is out of range [{lo}, {hi}]")
+    return value
+
+
+def _field_kind(spec: dataclasses.Field) -> type:
+    text = str(spec.type)
+    for kind in (bool, int, float):
+        if text.startswith(kind.__name__):
+            return kind
+    raise TypeError(f"unsupported config field type {text}")
+
+
+def _check_cross_constraints(cfg: Config) -> None:
+    if cfg.arms.l1 >= cfg.arms.l2:
+        raise ConfigError(f"config values arms.l1 = {cfg.arms.l1} and arms.l2 = {cfg.arms.l2} "
+                          "must satisfy l1 < l2")
+    c = cfg.cost
+    if c.census_width % 2 == 0 or c.census_height % 2 == 0:
+        raise ConfigError("config values cost.census_width and cost.census_height must be odd")
+    if c.census_width * c.census_height - 1 > 64:
+        raise ConfigError("config values cost.census_width x cost.census_height must give at most "
+                          "64 neighbours (one uint64 per pixel)")
+
+
+def config_from_dict(data: dict[str, Any] | None, base: Config | None = None) -> Config:
+    """Merge a nested mapping over ``base`` (the defaults), checking every key and value."""
+    base = base or Config()
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ConfigError("config must be a mapping of sections (cost, arms, ...)")
+    sections = {}
+    for name, value in data.items():
+        if name not in _SECTIONS:
+            allowed = ", ".join(_SECTIONS)
+            raise ConfigError(f"unknown config key '{name}' (allowed sections: {allowed})")
+        if value is None:
+            continue
+        if not isinstance(value, dict):
+            raise ConfigError(f"config section '{name}' must be a mapping")
+        current = getattr(base, name)
+        fields = {f.name: f for f in dataclasses.fields(current)}
+        changes = {}
+        for key, item in value.items():
+            if key not in fields:
+                allowed = ", ".join(fields)
+                raise ConfigError(f"unknown config key '{name}.{key}' (allowed: {allowed})")
+            changes[key] = _check_value(f"{name}.{key}", fields[key], item)
+        sections[name] = dataclasses.replace(current, **changes)
+    cfg = dataclasses.replace(base, **sections)
+    _check_cross_constraints(cfg)
+    return cfg
+
+
+def bundled_config_names() -> list[str]:
+    """Names of the configs shipped with the package (``paper``, ``census``, ...)."""
+    folder = resources.files("vsmatch") / "configs"
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".yaml"))
+
+
+DEFAULT_CONFIG_NAME = "default"
+
+
+def load_config(name_or_path: str | Path | Config | None = None) -> Config:
+    """Load a bundled config by name (``paper``), or a YAML file by path.
+
+    ``None`` gives the bundled ``default`` config.
+    """
+    if isinstance(name_or_path, Config):
+        return name_or_path
+    if name_or_path is None:
+        name_or_path = DEFAULT_CONFIG_NAME
+    text, origin = _read_config_text(str(name_or_path))
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark is not None else ""
+        raise ConfigError(f"config {origin} is not valid YAML{where}") from None
+    try:
+        return config_from_dict(data)
+    except ConfigError as exc:
+        raise ConfigError(f"{origin}: {exc}") from None
+
+
+def _read_config_text(name_or_path: str) -> tuple[str, str]:
+    if name_or_path in bundled_config_names():
+        res = resources.files("vsmatch") / "configs" / f"{name_or_path}.yaml"
+        return res.read_text(encoding="utf-8"), f"'{name_or_path}'"
+    path = Path(name_or_path)
+    if not path.is_file():
+        names = ", ".join(bundled_config_names())
+        raise ConfigError(f"config '{name_or_path}' is neither a bundled config ({names}) "
+                          "nor an existing file")
+    try:
+        return path.read_text(encoding="utf-8"), str(path)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"cannot read config {path}: {exc}") from None
+
+
+def config_name(name_or_path: str | Path | None) -> str:
+    """A short name for a config: the bundled name, or the file's stem."""
+    if name_or_path is None:
+        return DEFAULT_CONFIG_NAME
+    text = str(name_or_path)
+    return text if text in bundled_config_names() else Path(text).stem

@@ -1,0 +1,60 @@
+"""Matching cost: census Hamming distance, sensitivity difference, optional colour AD.
+
+The cost volume has one layout everywhere in vsmatch: ``(H, W, D)`` float32, C-contiguous,
+so the costs of one pixel over all disparities are adjacent in memory.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._kernels.census import census_transform as _census_kernel
+from ._kernels.cost import matching_cost_volume
+from .config import CostConfig
+from .images import as_channels
+
+
+def census_transform(grey: np.ndarray, *, width: int = 9, height: int = 7) -> np.ndarray:
+    """Census bit strings (uint64, (H, W)) over a ``width`` x ``height`` window.
+
+    Bit order: window neighbours row by row, centre skipped, the first one in the highest
+    used bit; a bit is set when the neighbour is darker than the centre.
+    """
+    if width % 2 == 0 or height % 2 == 0 or width * height - 1 > 64:
+        raise ValueError(f"census window {width}x{height} must be odd-sized with at most "
+                         "64 neighbours")
+    grey = np.ascontiguousarray(grey, dtype=np.float32)
+    out = np.empty(grey.shape, dtype=np.uint64)
+    _census_kernel(grey, width // 2, height // 2, out)
+    return out
+
+
+def rho(cost: np.ndarray | float, lam: float) -> np.ndarray | float:
+    """Robust mapping into [0, 1): ``1 - exp(-cost / lam)``."""
+    return 1.0 - np.exp(-np.asarray(cost, dtype=np.float64) / lam)
+
+
+def max_cost(cfg: CostConfig) -> float:
+    """The cost given where the right pixel does not exist: every term at its limit 1."""
+    return 1.0 + (cfg.lambda_gradient is not None) + (cfg.lambda_ad is not None)
+
+
+def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
+                census_l: np.ndarray, census_r: np.ndarray,
+                grad_l: np.ndarray, grad_r: np.ndarray,
+                *, n_disp: int, cfg: CostConfig) -> np.ndarray:
+    """The matching cost volume ``(H, W, n_disp)`` float32 (ALGORITHM.md §2)."""
+    height, width = census_l.shape
+    n_bits = cfg.census_width * cfg.census_height - 1
+    table = rho(np.arange(n_bits + 1), cfg.lambda_census).astype(np.float32)
+    inv_grad = -1.0 if cfg.lambda_gradient is None else 1.0 / cfg.lambda_gradient
+    inv_ad = -1.0 if cfg.lambda_ad is None else 1.0 / cfg.lambda_ad
+    colour_l = as_channels(colour_l)
+    colour_r = as_channels(colour_r)
+    out = np.empty((height, width, n_disp), dtype=np.float32)
+    matching_cost_volume(census_l, census_r,
+                         np.ascontiguousarray(grad_l, dtype=np.float32),
+                         np.ascontiguousarray(grad_r, dtype=np.float32),
+                         colour_l, colour_r, table, inv_grad, inv_ad,
+                         np.float32(max_cost(cfg)), out)
+    return out

@@ -1,0 +1,73 @@
+"""Winner-takes-all, left-right consistency check, and filling of rejected pixels (§4)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._kernels import disparity as _k
+from .config import FillConfig
+from .images import as_channels
+
+#: How vsmatch marks a pixel without a disparity estimate (also in PFM output).
+INVALID_DISPARITY = np.float32(np.inf)
+
+#: Labels of the left-right check.
+VALID, OCCLUDED, MISMATCHED = _k.VALID, _k.OCCLUDED, _k.MISMATCHED
+
+
+def winner_takes_all(volume: np.ndarray) -> np.ndarray:
+    """Left-view disparity ``argmin_d C(p, d)`` as int32 (H, W); ties take the smaller d."""
+    out = np.empty(volume.shape[:2], dtype=np.int32)
+    _k.winner_takes_all(volume, out)
+    return out
+
+
+def winner_takes_all_right(volume: np.ndarray) -> np.ndarray:
+    """Right-view disparity ``argmin_d C((x + d, y), d)`` from the left volume, int32."""
+    out = np.empty(volume.shape[:2], dtype=np.int32)
+    _k.winner_takes_all_right(volume, out)
+    return out
+
+
+def left_right_check(disp_l: np.ndarray, disp_r: np.ndarray, *, n_disp: int,
+                     tolerance: int) -> np.ndarray:
+    """Labels (uint8, (H, W)): VALID where ``|d_L(p) - d_R(x - d_L(p))| <= tolerance``;
+    otherwise OCCLUDED when no disparity would pass the check, else MISMATCHED."""
+    labels = np.empty(disp_l.shape, dtype=np.uint8)
+    _k.left_right_check(np.ascontiguousarray(disp_l, dtype=np.int32),
+                        np.ascontiguousarray(disp_r, dtype=np.int32),
+                        int(n_disp), int(tolerance), labels)
+    return labels
+
+
+def search_directions(count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Unit steps ``(dy, dx)`` of ``count`` directions evenly spread over the circle.
+
+    The largest component is 1 so a walk visits every row or column it crosses.
+    """
+    angles = np.arange(count) * (2.0 * np.pi / count)
+    dy, dx = np.sin(angles), np.cos(angles)
+    scale = np.maximum(np.abs(dy), np.abs(dx))
+    return dy / scale, dx / scale
+
+
+def fill_rejected(disp: np.ndarray, labels: np.ndarray, image: np.ndarray,
+                  cfg: FillConfig) -> np.ndarray:
+    """Give each rejected pixel a disparity from the valid pixels around it (float32).
+
+    Occluded pixels take the lowest of the first valid disparities found along the search
+    directions (the background); mismatched ones the one whose colour is most similar.
+    """
+    steps_y, steps_x = search_directions(cfg.directions)
+    out = np.empty(disp.shape, dtype=np.float32)
+    _k.fill_rejected(np.ascontiguousarray(disp, dtype=np.float32), labels,
+                     as_channels(image), steps_y, steps_x, int(cfg.max_search),
+                     INVALID_DISPARITY, out)
+    return out
+
+
+def mark_rejected(disp: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """float32 disparity with rejected pixels set to :data:`INVALID_DISPARITY`."""
+    out = disp.astype(np.float32)
+    out[labels != VALID] = INVALID_DISPARITY
+    return out

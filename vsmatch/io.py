@@ -1,0 +1,143 @@
+"""Reading stereo images and writing disparity maps, atomically.
+
+Every file is written under a temporary name in its destination folder and renamed into
+place, so an interrupted run never leaves a partial file behind.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from .disparity import INVALID_DISPARITY
+
+#: Output formats of a disparity map, by file extension.
+DISPARITY_FORMATS = (".pfm", ".png")
+
+
+class ImageError(ValueError):
+    """An input image that cannot be used; the message is one line and names the file."""
+
+
+def read_image(path: str | Path) -> np.ndarray:
+    """Read a stereo view as (H, W, 3) uint8 BGR.
+
+    Grey images are repeated over three channels, 16-bit images are scaled to 8 bits
+    (the top byte), and an alpha channel is dropped.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise ImageError(f"{path}: file not found")
+    if not path.is_file():
+        raise ImageError(f"{path}: not a file")
+    data = np.fromfile(str(path), dtype=np.uint8)
+    image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    if image is None or image.size == 0:
+        raise ImageError(f"{path}: not a readable image (unknown format, or truncated)")
+    if image.dtype == np.uint16:
+        image = (image >> 8).astype(np.uint8)
+    elif image.dtype != np.uint8:
+        raise ImageError(f"{path}: unsupported pixel type {image.dtype} (8- or 16-bit expected)")
+    if image.ndim == 2:
+        image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+    elif image.shape[2] == 4:
+        image = cv2.cvtColor(image, cv2.COLOR_BGRA2BGR)
+    elif image.shape[2] == 1:
+        image = cv2.cvtColor(image[:, :, 0], cv2.COLOR_GRAY2BGR)
+    elif image.shape[2] != 3:
+        raise ImageError(f"{path}: unsupported number of channels {image.shape[2]}")
+    return np.ascontiguousarray(image)
+
+
+def write_atomic(path: str | Path, encode) -> None:
+    """Write bytes made by ``encode(tmp_path)`` to ``path`` through a temporary file.
+
+    ``encode`` receives a temporary path with the same extension (OpenCV picks the format
+    from it) and must create that file; the result is renamed onto ``path``.
+    """
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise OSError(f"{folder}: output folder does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}",
+                               dir=folder)
+    os.close(fd)
+    try:
+        encode(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def imwrite_atomic(path: str | Path, image: np.ndarray) -> None:
+    """``cv2.imwrite`` through a temporary file; raises OSError when OpenCV cannot write."""
+    def encode(tmp: str) -> None:
+        if not cv2.imwrite(tmp, image):
+            raise OSError(f"{path}: could not be written")
+    write_atomic(path, encode)
+
+
+def disparity_to_png16(disp: np.ndarray) -> np.ndarray:
+    """KITTI convention: uint16 value = round(256 d), 0 = invalid."""
+    valid = np.isfinite(disp) & (disp >= 0)
+    out = np.zeros(disp.shape, dtype=np.uint16)
+    out[valid] = np.clip(np.round(disp[valid] * 256.0), 1, 65535).astype(np.uint16)
+    return out
+
+
+def png16_to_disparity(png: np.ndarray) -> np.ndarray:
+    out = png.astype(np.float32) / 256.0
+    out[png == 0] = INVALID_DISPARITY
+    return out
+
+
+def write_disparity(path: str | Path, disp: np.ndarray) -> None:
+    """Write a disparity map: ``.pfm`` float32 (Middlebury, inf = invalid) or ``.png``
+    16-bit (KITTI, value = round(256 d), 0 = invalid)."""
+    suffix = Path(path).suffix.lower()
+    if suffix == ".pfm":
+        imwrite_atomic(path, np.ascontiguousarray(disp, dtype=np.float32))
+    elif suffix == ".png":
+        imwrite_atomic(path, disparity_to_png16(disp))
+    else:
+        raise ValueError(f"{path}: unknown disparity format '{suffix}' "
+                         f"(use {' or '.join(DISPARITY_FORMATS)})")
+
+
+def read_disparity(path: str | Path) -> np.ndarray:
+    """Read a disparity map written by :func:`write_disparity` (float32, inf = invalid)."""
+    path = Path(path)
+    image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if image is None:
+        raise ImageError(f"{path}: not a readable disparity map")
+    if path.suffix.lower() == ".png":
+        return png16_to_disparity(image)
+    return image.astype(np.float32)
+
+
+def colour_disparity(disp: np.ndarray, max_disp: float) -> np.ndarray:
+    """A colour-mapped view (BGR uint8) of a disparity map; invalid pixels black."""
+    valid = np.isfinite(disp)
+    scaled = np.zeros(disp.shape, dtype=np.uint8)
+    scaled[valid] = np.clip(disp[valid] * (255.0 / max(max_disp, 1e-6)), 0, 255).astype(np.uint8)
+    out = cv2.applyColorMap(scaled, cv2.COLORMAP_TURBO)
+    out[~valid] = 0
+    return out
+
+
+def error_image(disp: np.ndarray, bad: np.ndarray, evaluated: np.ndarray,
+                max_disp: float) -> np.ndarray:
+    """The disparity in grey with bad pixels red and pixels not evaluated darkened."""
+    valid = np.isfinite(disp)
+    grey = np.zeros(disp.shape, dtype=np.uint8)
+    grey[valid] = np.clip(disp[valid] * (255.0 / max(max_disp, 1e-6)), 0, 255).astype(np.uint8)
+    out = cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR)
+    out[~evaluated] //= 3
+    out[bad & evaluated] = (0, 0, 255)
+    return out

@@ -1,0 +1,123 @@
+"""The whole method, stage by stage: :func:`match` reads like the algorithm."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import aggregation, cost, disparity, sensitivity
+from .config import Config, load_config
+from .images import to_grey
+
+
+@dataclass
+class MatchResult:
+    """The left-view disparity and what was learnt on the way."""
+
+    disparity: np.ndarray
+    labels: np.ndarray | None = None
+    seconds: dict[str, float] = field(default_factory=dict)
+
+
+def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config) -> None:
+    """Refuse inputs the method cannot run on, with a message naming the problem."""
+    for name, image in (("left", left), ("right", right)):
+        if not isinstance(image, np.ndarray) or image.ndim not in (2, 3) or (
+                image.ndim == 3 and image.shape[2] != 3):
+            raise ValueError(f"{name} image must be an (H, W) or (H, W, 3) array, "
+                             f"got shape {getattr(image, 'shape', None)}")
+        if image.dtype != np.uint8:
+            raise ValueError(f"{name} image must be uint8, got {image.dtype}")
+    if left.shape != right.shape:
+        raise ValueError(f"left and right images differ in size: {left.shape[1]}x{left.shape[0]}"
+                         f" and {right.shape[1]}x{right.shape[0]}")
+    height, width = left.shape[:2]
+    if width < cfg.cost.census_width or height < cfg.cost.census_height:
+        raise ValueError(f"images of {width}x{height} are smaller than the census window "
+                         f"{cfg.cost.census_width}x{cfg.cost.census_height}")
+    if isinstance(max_disp, bool) or not isinstance(max_disp, (int, np.integer)):
+        raise ValueError(f"max_disp must be an integer, got {max_disp!r}")
+    if not 0 < max_disp < width:
+        raise ValueError(f"max_disp = {max_disp} must be between 1 and the image width "
+                         f"minus one ({width - 1})")
+
+
+def match(left: np.ndarray, right: np.ndarray, *, max_disp: int,
+          config: Config | str | None = None) -> np.ndarray:
+    """Left-view disparity of a rectified stereo pair.
+
+    Parameters
+    ----------
+    left, right : ndarray, (H, W, 3) uint8 in BGR order (as ``cv2.imread`` gives), or (H, W)
+        uint8 grey. Both the same size.
+    max_disp : int
+        The largest disparity searched; disparities ``0 .. max_disp`` are considered.
+    config : Config, bundled config name or YAML path, optional
+        The method's parameters; ``None`` uses the bundled ``default``.
+
+    Returns
+    -------
+    ndarray, (H, W) float32
+        Disparity in pixels, left view. A pixel without an estimate holds
+        :data:`vsmatch.INVALID_DISPARITY` (``inf``).
+    """
+    return run(left, right, max_disp=max_disp, config=config).disparity
+
+
+def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
+        config: Config | str | None = None,
+        on_stage: Callable[[str], None] | None = None) -> MatchResult:
+    """:func:`match` with per-stage timings and the left-right labels."""
+    cfg = load_config(config)
+    check_pair(left, right, max_disp, cfg)
+    n_disp = int(max_disp) + 1
+    seconds: dict[str, float] = {}
+
+    @contextmanager
+    def stage(name: str):
+        if on_stage is not None:
+            on_stage(name)
+        start = time.perf_counter()
+        yield
+        seconds[name] = seconds.get(name, 0.0) + time.perf_counter() - start
+
+    with stage("cost"):
+        grey_l = sensitivity.presmooth(to_grey(left), cfg.cost.presmooth_sigma)
+        grey_r = sensitivity.presmooth(to_grey(right), cfg.cost.presmooth_sigma)
+        grad_l, theta_l = sensitivity.visual_sensitivity(grey_l)
+        grad_r, theta_r = sensitivity.visual_sensitivity(grey_r)
+        census_kw = dict(width=cfg.cost.census_width, height=cfg.cost.census_height)
+        volume = cost.cost_volume(left, right,
+                                  cost.census_transform(grey_l, **census_kw),
+                                  cost.census_transform(grey_r, **census_kw),
+                                  grad_l, grad_r, n_disp=n_disp, cfg=cfg.cost)
+
+    if cfg.aggregation.iterations > 0:
+        with stage("aggregation"):
+            arms_l = aggregation.cross_arms(left, theta_l, grad_l, cfg.arms)
+            arms_r = aggregation.cross_arms(right, theta_r, grad_r, cfg.arms)
+            volume = aggregation.aggregate_cross(volume, arms_l, arms_r,
+                                                 iterations=cfg.aggregation.iterations)
+
+    with stage("wta"):
+        disp_l = disparity.winner_takes_all(volume)
+
+    labels = None
+    if cfg.consistency.enabled:
+        with stage("consistency"):
+            disp_r = disparity.winner_takes_all_right(volume)
+            labels = disparity.left_right_check(disp_l, disp_r, n_disp=n_disp,
+                                                tolerance=cfg.consistency.tolerance)
+        with stage("fill"):
+            if cfg.fill.enabled:
+                result = disparity.fill_rejected(disp_l, labels, left, cfg.fill)
+            else:
+                result = disparity.mark_rejected(disp_l, labels)
+    else:
+        result = disp_l.astype(np.float32)
+
+    return MatchResult(disparity=result, labels=labels, seconds=seconds)

@@ -1,0 +1,26 @@
+"""Visual sensitivity: Sobel gradient magnitude G and direction theta (paper eq. 1-3, 6)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+
+def presmooth(grey: np.ndarray, sigma: float) -> np.ndarray:
+    """Small Gaussian blur before the sensitivity and census; sigma 0 leaves it as is."""
+    if sigma <= 0:
+        return grey
+    return cv2.GaussianBlur(grey, (0, 0), sigmaX=sigma, sigmaY=sigma,
+                            borderType=cv2.BORDER_REFLECT_101)
+
+
+def visual_sensitivity(grey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return ``(G, theta)``, both float32 (H, W).
+
+    ``G = sqrt(Gx^2 + Gy^2)`` with the 3x3 Sobel templates, and ``theta = atan2(Gy, Gx)``,
+    the direction of fastest grey change (atan2 keeps the quadrant).
+    """
+    grey = np.ascontiguousarray(grey, dtype=np.float32)
+    gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT_101)
+    gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT_101)
+    return np.sqrt(gx * gx + gy * gy), np.arctan2(gy, gx).astype(np.float32)
