@@ -1,0 +1,82 @@
+"""A synthetic stereo pair with known disparity, made in code (``vsmatch demo``).
+
+Textured layers at several depths in front of a slanted background plane are rendered
+into both views, back to front, so the pair has real occlusions. Each layer's texture is
+attached to the surface, so a left pixel and its match show the same texture value.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+
+@dataclass(frozen=True)
+class SyntheticPair:
+    left: np.ndarray  # (H, W, 3) uint8 BGR
+    right: np.ndarray
+    disparity: np.ndarray  # left view, float32
+    nonocc: np.ndarray  # bool: visible in both views
+    max_disp: int
+
+
+def _texture(rng: np.random.Generator, height: int, width: int) -> np.ndarray:
+    """Smooth random colour texture, float32 (H, W, 3) in 0..255."""
+    noise = rng.random((height, width, 3), dtype=np.float32)
+    tex = cv2.GaussianBlur(noise, (0, 0), 1.2)
+    tex = (tex - tex.min()) / max(float(tex.max() - tex.min()), 1e-6)
+    base = rng.uniform(40, 200, size=3).astype(np.float32)
+    return np.clip(base + (tex - 0.5) * 160.0, 0, 255).astype(np.float32)
+
+
+def make_pair(width: int = 320, height: int = 240, seed: int = 0) -> SyntheticPair:
+    """Render the pair. Layers (back to front): a slanted plane, two rectangles, a disc."""
+    rng = np.random.default_rng(seed)
+    # (kind, shape in left-view coordinates, disparity a + b * x)
+    layers = [
+        ("all", None, (6.0, 10.0 / width)),
+        ("rect", (0.15 * width, 0.15 * height, 0.5 * width, 0.6 * height), (20.0, 0.0)),
+        ("rect", (0.55 * width, 0.1 * height, 0.85 * width, 0.45 * height), (28.0, 0.0)),
+        ("disc", (0.4 * width, 0.7 * height, 0.17 * height), (36.0, 0.0)),
+    ]
+    max_disp = 40
+    tex_width = width + 2 * max_disp
+    textures = [_texture(rng, height, tex_width) for _ in layers]
+    ys, xs = np.mgrid[0:height, 0:width].astype(np.float32)
+
+    views, ids, disparity = [], [], None
+    for view in ("left", "right"):
+        image = np.zeros((height, width, 3), np.float32)
+        layer_id = np.full((height, width), -1, np.int32)
+        disp = np.zeros((height, width), np.float32)
+        for k, ((kind, shape, (a, b)), tex) in enumerate(zip(layers, textures)):
+            # u: the left-view column of the surface point seen at (y, x).
+            u = xs if view == "left" else (xs + a) / (1.0 - b)
+            inside = _inside(kind, shape, u, ys)
+            sample = cv2.remap(tex, u + max_disp, ys, cv2.INTER_LINEAR,
+                               borderMode=cv2.BORDER_REFLECT)
+            image[inside] = sample[inside]
+            layer_id[inside] = k
+            disp[inside] = (a + b * u)[inside]
+        views.append(np.clip(np.round(image), 0, 255).astype(np.uint8))
+        ids.append(layer_id)
+        if view == "left":
+            disparity = disp
+    xr = np.round(xs - disparity).astype(np.int64)
+    seen = xr >= 0
+    nonocc = np.zeros((height, width), bool)
+    yy, xx = np.nonzero(seen)
+    nonocc[yy, xx] = ids[1][yy, xr[yy, xx]] == ids[0][yy, xx]
+    return SyntheticPair(views[0], views[1], disparity.astype(np.float32), nonocc, max_disp)
+
+
+def _inside(kind: str, shape, u: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    if kind == "all":
+        return np.ones(u.shape, bool)
+    if kind == "rect":
+        x0, y0, x1, y1 = shape
+        return (u >= x0) & (u < x1) & (ys >= y0) & (ys < y1)
+    cx, cy, r = shape
+    return (u - cx) ** 2 + (ys - cy) ** 2 < r * r
