@@ -1,0 +1,41 @@
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def data_root() -> Path | None:
+    """VSMATCH_DATA, else ../shared/data beside the checkout."""
+    env = os.environ.get("VSMATCH_DATA")
+    candidates = [Path(env)] if env else [REPO.parent / "shared" / "data"]
+    for root in candidates:
+        if (root / "middlebury2").is_dir():
+            return root
+    return None
+
+
+@pytest.fixture(scope="session")
+def data_dir() -> Path:
+    root = data_root()
+    if root is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail("Middlebury data not found: in CI the data tests must run "
+                        "(set VSMATCH_DATA)")
+        pytest.skip("Middlebury data not found (set VSMATCH_DATA)")
+    return root
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(0)
+
+
+def random_pair(rng, height=14, width=20, shift=2, channels=3):
+    """Random texture; left pixel x shows what right pixel x - shift shows."""
+    wide = rng.integers(0, 256, size=(height, width + shift, channels), dtype=np.uint8)
+    left = np.ascontiguousarray(wide[:, :width])
+    right = np.ascontiguousarray(wide[:, shift:])
+    return left, right

@@ -1,0 +1,116 @@
+"""Slow, obvious NumPy/Python versions of the kernels, for tests only."""
+
+import numpy as np
+
+
+def census(grey, half_w, half_h):
+    h, w = grey.shape
+    out = np.zeros((h, w), dtype=np.uint64)
+    for y in range(h):
+        for x in range(w):
+            bits = 0
+            for dy in range(-half_h, half_h + 1):
+                for dx in range(-half_w, half_w + 1):
+                    if dy == 0 and dx == 0:
+                        continue
+                    q = grey[min(max(y + dy, 0), h - 1), min(max(x + dx, 0), w - 1)]
+                    bits = (bits << 1) | int(q < grey[y, x])
+            out[y, x] = bits
+    return out
+
+
+def cost_volume(cl, cr, gl, gr, il, ir, n_disp, lam_s, lam_g, lam_ad):
+    h, w = cl.shape
+    terms = 1 + (lam_g is not None) + (lam_ad is not None)
+    out = np.full((h, w, n_disp), terms, dtype=np.float64)
+    for y in range(h):
+        for x in range(w):
+            for d in range(min(n_disp, x + 1)):
+                ham = bin(int(cl[y, x]) ^ int(cr[y, x - d])).count("1")
+                c = 1 - np.exp(-ham / lam_s)
+                if lam_g is not None:
+                    c += 1 - np.exp(-abs(float(gl[y, x]) - float(gr[y, x - d])) / lam_g)
+                if lam_ad is not None:
+                    ad = np.abs(il[y, x].astype(float) - ir[y, x - d].astype(float)).mean()
+                    c += 1 - np.exp(-ad / lam_ad)
+                out[y, x, d] = c
+    return out
+
+
+def cross_arms(image, theta, grad, tau1, tau2, tau3, l1, l2, kappa, g_sat):
+    h, w = theta.shape
+    img = image.astype(float).reshape(h, w, -1)
+    dist = lambda a, b: np.abs(img[a] - img[b]).max()
+    out = np.zeros((h, w, 4), dtype=int)
+    for y in range(h):
+        for x in range(w):
+            s = min(1.0, grad[y, x] / g_sat)
+            for k, (sy, sx, phi) in enumerate(((0, -1, 0.0), (0, 1, 0.0),
+                                               (-1, 0, np.pi / 2), (1, 0, np.pi / 2))):
+                f = max(0.0, 1 + kappa * abs(np.cos(theta[y, x] - phi)) * s)
+                n = 0
+                while n < l2:
+                    ny, nx = y + (n + 1) * sy, x + (n + 1) * sx
+                    if not (0 <= ny < h and 0 <= nx < w):
+                        break
+                    to_anchor = dist((ny, nx), (y, x))
+                    if to_anchor >= tau1 * f or dist((ny, nx), (ny - sy, nx - sx)) >= tau2:
+                        break
+                    if n + 1 > l1 and to_anchor >= tau3 * f:
+                        break
+                    n += 1
+                out[y, x, k] = n
+    return out
+
+
+def _combined(arms_l, arms_r, y, x, d, k):
+    a = arms_l[y, x, k]
+    return min(a, arms_r[y, x - d, k]) if x - d >= 0 else a
+
+
+def aggregate(volume, arms_l, arms_r, iterations):
+    """Average over the explicit set of pixels of each cross region."""
+    cur = volume.astype(np.float64)
+    h, w, n = cur.shape
+    for it in range(iterations):
+        rows_first = it % 2 == 0
+        nxt = np.zeros_like(cur)
+        for y in range(h):
+            for x in range(w):
+                for d in range(n):
+                    a = lambda yy, xx, k: _combined(arms_l, arms_r, yy, xx, d, k)
+                    pixels = []
+                    if rows_first:  # vertical arm of p, each with its horizontal arm
+                        for yy in range(y - a(y, x, 2), y + a(y, x, 3) + 1):
+                            pixels += [(yy, xx) for xx in
+                                       range(x - a(yy, x, 0), x + a(yy, x, 1) + 1)]
+                    else:
+                        for xx in range(x - a(y, x, 0), x + a(y, x, 1) + 1):
+                            pixels += [(yy, xx) for yy in
+                                       range(y - a(y, xx, 2), y + a(y, xx, 3) + 1)]
+                    nxt[y, x, d] = np.mean([cur[q][d] for q in pixels])
+        cur = nxt
+    return cur
+
+
+def wta_right(volume):
+    h, w, n = volume.shape
+    out = np.zeros((h, w), dtype=int)
+    for y in range(h):
+        for x in range(w):
+            costs = [volume[y, x + d, d] for d in range(min(n, w - x))]
+            out[y, x] = int(np.argmin(costs))
+    return out
+
+
+def lr_labels(dl, dr, n_disp, tol):
+    h, w = dl.shape
+    out = np.zeros((h, w), dtype=np.uint8)
+    for y in range(h):
+        for x in range(w):
+            d = dl[y, x]
+            if x - d >= 0 and abs(d - dr[y, x - d]) <= tol:
+                continue
+            passes = any(abs(dd - dr[y, x - dd]) <= tol for dd in range(min(n_disp, x + 1)))
+            out[y, x] = 2 if passes else 1
+    return out

@@ -1,0 +1,55 @@
+import numpy as np
+import pytest
+
+from vsmatch import aggregation
+from vsmatch.config import ArmsConfig
+
+import reference
+
+
+@pytest.mark.parametrize("kappa", [0.0, 1.5, -0.5])
+def test_cross_arms_match_reference(rng, kappa):
+    image = rng.integers(0, 60, size=(12, 15, 3), dtype=np.uint8)
+    theta = rng.uniform(-np.pi, np.pi, size=(12, 15)).astype(np.float32)
+    grad = rng.uniform(0, 300, size=(12, 15)).astype(np.float32)
+    cfg = ArmsConfig(tau1=30, tau2=25, tau3=12, l1=3, l2=6, kappa=kappa, g_sat=150)
+    got = aggregation.cross_arms(image, theta, grad, cfg)
+    want = reference.cross_arms(image, theta, grad, 30, 25, 12, 3, 6, kappa, 150)
+    np.testing.assert_array_equal(got, want)
+
+
+def test_arms_of_a_flat_image_reach_l2_or_the_border():
+    image = np.full((9, 40, 3), 100, np.uint8)
+    zeros = np.zeros((9, 40), np.float32)
+    arms = aggregation.cross_arms(image, zeros, zeros, ArmsConfig(l1=5, l2=10))
+    assert arms[4, 20].tolist() == [10, 10, 4, 4]
+    assert arms[0, 0].tolist() == [0, 10, 0, 8]
+
+
+@pytest.mark.parametrize("iterations", [1, 2, 3])
+def test_aggregation_matches_explicit_region_average(rng, iterations):
+    h, w, n = 8, 11, 4
+    volume = rng.random((h, w, n), dtype=np.float32)
+    arms_l = rng.integers(0, 4, size=(h, w, 4)).astype(np.int32)
+    arms_r = rng.integers(0, 4, size=(h, w, 4)).astype(np.int32)
+    # Arms must stay inside the image.
+    for arms in (arms_l, arms_r):
+        xs, ys = np.arange(w), np.arange(h)
+        arms[..., 0] = np.minimum(arms[..., 0], xs[None, :])
+        arms[..., 1] = np.minimum(arms[..., 1], (w - 1 - xs)[None, :])
+        arms[..., 2] = np.minimum(arms[..., 2], ys[:, None])
+        arms[..., 3] = np.minimum(arms[..., 3], (h - 1 - ys)[:, None])
+    want = reference.aggregate(volume, arms_l, arms_r, iterations)
+    got = aggregation.aggregate_cross(volume.copy(), arms_l, arms_r, iterations=iterations)
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
+
+
+def test_aggregation_keeps_a_constant_volume():
+    volume = np.full((6, 7, 3), 0.25, np.float32)
+    arms = np.ones((6, 7, 4), np.int32)
+    arms[:, 0, 0] = 0
+    arms[:, -1, 1] = 0
+    arms[0, :, 2] = 0
+    arms[-1, :, 3] = 0
+    got = aggregation.aggregate_cross(volume, arms, arms, iterations=4)
+    np.testing.assert_allclose(got, 0.25, rtol=1e-6)

@@ -1,0 +1,67 @@
+import pytest
+
+from vsmatch.config import (Config, ConfigError, bundled_config_names, config_from_dict,
+                            load_config)
+
+
+def test_bundled_configs_load():
+    assert {"census", "paper", "default"} <= set(bundled_config_names())
+    for name in bundled_config_names():
+        assert isinstance(load_config(name), Config)
+    assert load_config(None) == load_config("default")
+
+
+def test_census_config_is_the_bare_baseline():
+    cfg = load_config("census")
+    assert (cfg.cost.census_width, cfg.cost.census_height) == (9, 7)
+    assert cfg.cost.lambda_gradient is None and cfg.aggregation.iterations == 0
+    assert not cfg.consistency.enabled
+
+
+def test_yaml_file_merges_over_defaults(tmp_path):
+    path = tmp_path / "mine.yaml"
+    path.write_text("arms:\n  kappa: 0.5\n  l2: 40\n")
+    cfg = load_config(path)
+    assert cfg.arms.kappa == 0.5 and cfg.arms.l2 == 40
+    assert cfg.arms.tau1 == Config().arms.tau1
+
+
+@pytest.mark.parametrize("data,message", [
+    ({"cost": {"lambda_censsus": 3}}, r"unknown config key 'cost.lambda_censsus'"),
+    ({"costs": {}}, r"unknown config key 'costs'"),
+    ({"arms": {"tau1": -1}}, r"arms.tau1 = -1.0 is out of range \[0.0, 255.0\]"),
+    ({"arms": {"l1": 2.5}}, r"arms.l1 = 2.5 must be a whole number"),
+    ({"arms": {"l1": 30, "l2": 20}}, r"l1 < l2"),
+    ({"fill": {"directions": 5}}, r"fill.directions = 5 is not one of 2, 8, 16"),
+    ({"consistency": {"enabled": "yes"}}, r"must be true or false"),
+    ({"cost": {"lambda_census": "x"}}, r"must be a number"),
+    ({"cost": {"census_width": 8}}, r"must be odd"),
+    ({"cost": {"census_width": 11}}, r"at most 64 neighbours"),
+    ({"cost": 3}, r"section 'cost' must be a mapping"),
+])
+def test_bad_values_are_refused_naming_the_key(data, message):
+    with pytest.raises(ConfigError, match=message):
+        config_from_dict(data)
+
+
+def test_null_switches_an_optional_term_off():
+    assert config_from_dict({"cost": {"lambda_gradient": None}}).cost.lambda_gradient is None
+    with pytest.raises(ConfigError, match="must not be empty"):
+        config_from_dict({"arms": {"tau1": None}})
+
+
+def test_broken_yaml_and_missing_file(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("arms: [1, 2\n")
+    with pytest.raises(ConfigError, match="not valid YAML at line"):
+        load_config(bad)
+    with pytest.raises(ConfigError, match="neither a bundled config"):
+        load_config(tmp_path / "missing.yaml")
+
+
+def test_error_messages_are_one_line(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("arms:\n  tau9: 1\n")
+    with pytest.raises(ConfigError) as info:
+        load_config(bad)
+    assert "\n" not in str(info.value) and str(bad) in str(info.value)

@@ -1,0 +1,63 @@
+import numpy as np
+import pytest
+
+from vsmatch import cost, sensitivity
+from vsmatch._kernels.census import popcount64
+from vsmatch.config import CostConfig
+
+import reference
+
+
+@pytest.mark.parametrize("width,height", [(9, 7), (3, 3), (5, 9), (1, 3)])
+def test_census_matches_reference(rng, width, height):
+    grey = rng.integers(0, 8, size=(11, 13)).astype(np.float32)  # many ties
+    got = cost.census_transform(grey, width=width, height=height)
+    assert got.dtype == np.uint64
+    np.testing.assert_array_equal(got, reference.census(grey, width // 2, height // 2))
+
+
+def test_census_rejects_even_or_too_large_window():
+    with pytest.raises(ValueError, match="census window"):
+        cost.census_transform(np.zeros((5, 5), np.float32), width=4, height=3)
+    with pytest.raises(ValueError, match="census window"):
+        cost.census_transform(np.zeros((5, 5), np.float32), width=11, height=7)
+
+
+def test_popcount_counts_bits(rng):
+    from numba import njit
+
+    count = njit(lambda v: popcount64(v))
+    values = rng.integers(0, 2**63, size=50, dtype=np.uint64)
+    for v in list(values) + [np.uint64(0), np.uint64(2**64 - 1)]:
+        assert count(np.uint64(v)) == bin(int(v)).count("1")
+
+
+@pytest.mark.parametrize("lam_g,lam_ad", [(None, None), (20.0, None), (20.0, 10.0)])
+def test_cost_volume_matches_reference(rng, lam_g, lam_ad):
+    left = rng.integers(0, 256, size=(9, 12, 3), dtype=np.uint8)
+    right = rng.integers(0, 256, size=(9, 12, 3), dtype=np.uint8)
+    gl, gr = (rng.random((9, 12), dtype=np.float32) * 100 for _ in range(2))
+    cl = cost.census_transform(left[..., 0].astype(np.float32))
+    cr = cost.census_transform(right[..., 0].astype(np.float32))
+    cfg = CostConfig(lambda_census=15.0, lambda_gradient=lam_g, lambda_ad=lam_ad)
+    got = cost.cost_volume(left, right, cl, cr, gl, gr, n_disp=5, cfg=cfg)
+    assert got.shape == (9, 12, 5) and got.dtype == np.float32
+    want = reference.cost_volume(cl, cr, gl, gr, left, right, 5, 15.0, lam_g, lam_ad)
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
+    assert np.all(got[:, 0, 1:] == cost.max_cost(cfg))  # no right pixel: maximum cost
+
+
+def test_visual_sensitivity_of_a_ramp():
+    # Grey rising by 2 per column: Sobel Gx = (1 + 2 + 1) * (2 * 2) = 16 inside, Gy = 0.
+    grey = np.tile(np.arange(10, dtype=np.float32) * 2, (6, 1))
+    g, theta = sensitivity.visual_sensitivity(grey)
+    np.testing.assert_allclose(g[1:-1, 1:-1], 16.0)
+    np.testing.assert_allclose(theta[1:-1, 1:-1], 0.0, atol=1e-6)
+    g, theta = sensitivity.visual_sensitivity(-grey.T.copy())  # falling downwards
+    np.testing.assert_allclose(theta[1:-1, 1:-1], -np.pi / 2, atol=1e-6)
+
+
+def test_presmooth_zero_is_identity(rng):
+    grey = rng.random((8, 8), dtype=np.float32)
+    assert sensitivity.presmooth(grey, 0.0) is grey
+    assert not np.array_equal(sensitivity.presmooth(grey, 1.0), grey)

@@ -1,0 +1,84 @@
+import cv2
+import numpy as np
+import pytest
+
+from vsmatch import io
+
+
+def test_pfm_round_trip_keeps_values_and_invalid(tmp_path, rng):
+    disp = rng.random((13, 17), dtype=np.float32) * 60
+    disp[3, 4] = np.inf
+    path = tmp_path / "d.pfm"
+    io.write_disparity(path, disp)
+    back = io.read_disparity(path)
+    np.testing.assert_array_equal(back, disp)
+    assert list(tmp_path.iterdir()) == [path]  # no temporary file left
+
+
+def test_pfm_is_middlebury_convention(tmp_path):
+    # Bottom row first, negative scale = little endian (Middlebury's PFM files).
+    disp = np.arange(6, dtype=np.float32).reshape(2, 3)
+    path = tmp_path / "d.pfm"
+    io.write_disparity(path, disp)
+    raw = path.read_bytes()
+    header_end = raw.index(b"\n", raw.index(b"\n", raw.index(b"\n") + 1) + 1) + 1
+    magic, width, height, scale = raw[:header_end].split()
+    assert (magic, int(width), int(height), float(scale)) == (b"Pf", 3, 2, -1.0)
+    data = np.frombuffer(raw[header_end:], dtype="<f4").reshape(2, 3)
+    np.testing.assert_array_equal(data[::-1], disp)
+
+
+def test_png16_round_trip_kitti_convention(tmp_path):
+    disp = np.array([[0.0, 1.5, 63.25], [np.inf, 0.001, 200.0]], np.float32)
+    path = tmp_path / "d.png"
+    io.write_disparity(path, disp)
+    raw = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    assert raw.dtype == np.uint16
+    # A valid disparity below 1/256 is stored as 1, since 0 means invalid.
+    assert raw.tolist() == [[1, 384, 16192], [0, 1, 51200]]
+    back = io.read_disparity(path)
+    assert np.isinf(back[1, 0])  # 0 means invalid
+    assert back[0, 1] == 1.5 and back[1, 2] == 200.0
+
+
+def test_unknown_disparity_format_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="unknown disparity format"):
+        io.write_disparity(tmp_path / "d.tif", np.zeros((2, 2), np.float32))
+
+
+@pytest.mark.parametrize("make", [
+    lambda a: cv2.cvtColor(a, cv2.COLOR_BGR2GRAY),
+    lambda a: a.astype(np.uint16) * 257,
+    lambda a: cv2.cvtColor(a, cv2.COLOR_BGR2BGRA),
+])
+def test_grey_16bit_and_rgba_inputs_become_bgr8(tmp_path, rng, make):
+    base = rng.integers(0, 256, size=(6, 7, 3), dtype=np.uint8)
+    path = tmp_path / "in.png"
+    cv2.imwrite(str(path), make(base))
+    image = io.read_image(path)
+    assert image.shape == (6, 7, 3) and image.dtype == np.uint8
+
+
+def test_16bit_input_keeps_the_top_byte(tmp_path, rng):
+    base = rng.integers(0, 256, size=(6, 7, 3), dtype=np.uint8)
+    cv2.imwrite(str(tmp_path / "a.png"), base.astype(np.uint16) * 257)
+    np.testing.assert_array_equal(io.read_image(tmp_path / "a.png"), base)
+
+
+def test_unreadable_inputs_give_one_line_errors(tmp_path):
+    with pytest.raises(io.ImageError, match="file not found"):
+        io.read_image(tmp_path / "nope.png")
+    (tmp_path / "text.png").write_text("not an image")
+    with pytest.raises(io.ImageError, match="not a readable image"):
+        io.read_image(tmp_path / "text.png")
+
+
+def test_failed_write_leaves_no_file(tmp_path):
+    def broken(tmp):
+        with open(tmp, "wb") as fh:
+            fh.write(b"partial")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        io.write_atomic(tmp_path / "out.pfm", broken)
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,55 @@
+"""Accuracy on the real Middlebury data, through the real pipeline (ALGORITHM.md, EVALUATION.md).
+
+The thresholds lock in what was measured (README, "Results") with a small margin.
+"""
+
+import numpy as np
+import pytest
+
+from vsmatch import datasets, evaluation
+
+pytestmark = pytest.mark.data
+
+
+@pytest.fixture(scope="module")
+def middlebury2(data_dir):
+    return datasets.load_dataset("middlebury2", data_dir)
+
+
+def mean_nonocc(scenes, config):
+    report = evaluation.evaluate(scenes, {"m": config}, dataset="test")
+    return report["methods"]["m"]["avg"]["nonocc"], report["methods"]["m"]["scenes"]
+
+
+def test_census_baseline_is_in_the_papers_range(middlebury2):
+    avg, _ = mean_nonocc(middlebury2, "census")
+    assert 22.0 <= avg <= 28.5  # paper: 25.13; measured 26.21
+
+
+def test_paper_method_on_middlebury2(middlebury2):
+    avg, scenes = mean_nonocc(middlebury2, "paper")
+    assert avg <= 4.3  # measured 3.97; the issue asks <= 6.0
+    assert all(s["nonocc"] < 7.0 for s in scenes.values())
+
+
+def test_middlebury2_masks_and_ranges(middlebury2):
+    for scene in middlebury2:
+        nonocc, all_, disc = (scene.masks[m] for m in ("nonocc", "all", "disc"))
+        assert nonocc.any() and not (nonocc & ~all_).any() and not (disc & ~nonocc).any()
+        assert scene.ground_truth[nonocc].max() <= scene.max_disp + 1
+
+
+def test_ground_truth_scores_zero(middlebury2):
+    scene = middlebury2[0]
+    assert evaluation.score_scene(scene.ground_truth, scene) == {
+        "nonocc": 0.0, "all": 0.0, "disc": 0.0}
+    shifted = scene.ground_truth + 1.5
+    assert evaluation.score_scene(shifted, scene)["nonocc"] == 100.0
+
+
+def test_middlebury_third_loads_with_consistency_masks(data_dir):
+    scenes = datasets.load_dataset("middlebury-third", data_dir, names=["Art"])
+    art = scenes[0]
+    assert art.max_disp == int(np.ceil(art.ground_truth.max()))
+    frac = art.masks["nonocc"].mean()
+    assert 0.6 < frac < art.masks["all"].mean() <= 1.0
