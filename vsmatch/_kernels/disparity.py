@@ -8,31 +8,22 @@ VALID, OCCLUDED, MISMATCHED = 0, 1, 2
 
 
 @njit(**KERNEL_OPTIONS)
-def winner_takes_all(volume, out):
-    """Left view: out[y, x] = argmin_d volume[y, x, d] (the smallest d on ties)."""
+def winner_takes_all(volume, right_view, out):
+    """Smallest-cost disparity per pixel; ties take the smaller d.
+
+    Left view: argmin_d volume[y, x, d]. Right view (``right_view`` = 1), from the same
+    left volume: argmin_d volume[y, x + d, d] over the d with x + d inside the image.
+    """
     height, width, n_disp = volume.shape
     for y in prange(height):
         for x in range(width):
+            last = n_disp if right_view == 0 else min(n_disp, width - x)
             best = 0
             best_cost = volume[y, x, 0]
-            for d in range(1, n_disp):
-                if volume[y, x, d] < best_cost:
-                    best_cost = volume[y, x, d]
-                    best = d
-            out[y, x] = best
-
-
-@njit(**KERNEL_OPTIONS)
-def winner_takes_all_right(volume, out):
-    """Right view from the left volume: out[y, x] = argmin_d volume[y, x + d, d]."""
-    height, width, n_disp = volume.shape
-    for y in prange(height):
-        for x in range(width):
-            best = 0
-            best_cost = volume[y, x, 0]
-            for d in range(1, min(n_disp, width - x)):
-                if volume[y, x + d, d] < best_cost:
-                    best_cost = volume[y, x + d, d]
+            for d in range(1, last):
+                c = volume[y, x + d * right_view, d]
+                if c < best_cost:
+                    best_cost = c
                     best = d
             out[y, x] = best
 
