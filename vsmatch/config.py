@@ -61,11 +61,37 @@ class AggregationConfig:
 
 
 @dataclass(frozen=True)
+class ScanlineConfig:
+    """Scanline optimisation over 4 directions between aggregation and WTA (§5.1).
+
+    P1 and P2 are divided by ``reduce_one`` where the colour changes by ``tau`` or more
+    in one image, by ``reduce_both`` where it does in both.
+    """
+
+    enabled: bool = _param(False)
+    p1: float = _param(1.0, 0.0, 100.0)
+    p2: float = _param(3.0, 0.0, 100.0)
+    tau: float = _param(15.0, 0.0, 255.0)
+    reduce_one: float = _param(4.0, 1.0, 100.0)
+    reduce_both: float = _param(10.0, 1.0, 100.0)
+
+
+@dataclass(frozen=True)
 class ConsistencyConfig:
     """Left-right check."""
 
     enabled: bool = _param(True)
     tolerance: int = _param(1, 0, 16)
+
+
+@dataclass(frozen=True)
+class VotingConfig:
+    """Iterative region voting on the pixels rejected by the left-right check (§5.2)."""
+
+    enabled: bool = _param(False)
+    iterations: int = _param(5, 1, 20)
+    min_votes: int = _param(20, 0, 10000)
+    min_share: float = _param(0.4, 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -82,14 +108,35 @@ class FillConfig:
 
 
 @dataclass(frozen=True)
+class DiscontinuityConfig:
+    """Depth-discontinuity adjustment (§5.4): at a jump of more than ``jump`` pixels, take
+    the horizontal neighbour's disparity where its cost is lower."""
+
+    enabled: bool = _param(False)
+    jump: float = _param(1.0, 0.0, 64.0)
+
+
+@dataclass(frozen=True)
+class SubpixelConfig:
+    """Sub-pixel parabola fit (§5.5) and the 3x3 median after it."""
+
+    enabled: bool = _param(False)
+    median: bool = _param(False)
+
+
+@dataclass(frozen=True)
 class Config:
     """All parameters of the method, one section per pipeline stage."""
 
     cost: CostConfig = field(default_factory=CostConfig)
     arms: ArmsConfig = field(default_factory=ArmsConfig)
     aggregation: AggregationConfig = field(default_factory=AggregationConfig)
+    scanline: ScanlineConfig = field(default_factory=ScanlineConfig)
     consistency: ConsistencyConfig = field(default_factory=ConsistencyConfig)
+    voting: VotingConfig = field(default_factory=VotingConfig)
     fill: FillConfig = field(default_factory=FillConfig)
+    discontinuity: DiscontinuityConfig = field(default_factory=DiscontinuityConfig)
+    subpixel: SubpixelConfig = field(default_factory=SubpixelConfig)
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
         return dataclasses.asdict(self)

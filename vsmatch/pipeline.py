@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import aggregation, cost, disparity, sensitivity
+from . import aggregation, cost, disparity, optimization, refinement, sensitivity
 from .config import Config, load_config
 from .images import to_grey
 
@@ -96,12 +96,19 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
                                   cost.census_transform(grey_r, **census_kw),
                                   grad_l, grad_r, n_disp=n_disp, cfg=cfg.cost)
 
+    arms_l = None
+    if cfg.aggregation.iterations > 0 or cfg.voting.enabled:
+        with stage("arms"):
+            arms_l = aggregation.cross_arms(left, theta_l, grad_l, cfg.arms)
     if cfg.aggregation.iterations > 0:
         with stage("aggregation"):
-            arms_l = aggregation.cross_arms(left, theta_l, grad_l, cfg.arms)
             arms_r = aggregation.cross_arms(right, theta_r, grad_r, cfg.arms)
             volume = aggregation.aggregate_cross(volume, arms_l, arms_r,
                                                  iterations=cfg.aggregation.iterations)
+
+    if cfg.scanline.enabled:
+        with stage("scanline"):
+            volume = optimization.scanline_optimise(volume, left, right, cfg.scanline)
 
     with stage("wta"):
         disp_l = disparity.winner_takes_all(volume)
@@ -112,6 +119,10 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
             disp_r = disparity.winner_takes_all_right(volume)
             labels = disparity.left_right_check(disp_l, disp_r, n_disp=n_disp,
                                                 tolerance=cfg.consistency.tolerance)
+        if cfg.voting.enabled:
+            with stage("voting"):
+                disp_l, labels = refinement.region_vote(disp_l, labels, arms_l,
+                                                        n_disp=n_disp, cfg=cfg.voting)
         with stage("fill"):
             if cfg.fill.enabled:
                 result = disparity.fill_rejected(disp_l, labels, left, cfg.fill)
@@ -119,5 +130,15 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
                 result = disparity.mark_rejected(disp_l, labels)
     else:
         result = disp_l.astype(np.float32)
+
+    if cfg.discontinuity.enabled:
+        with stage("discontinuity"):
+            result = refinement.discontinuity_adjust(result, volume, cfg.discontinuity)
+    if cfg.subpixel.enabled:
+        with stage("subpixel"):
+            result = refinement.subpixel(result, volume)
+    if cfg.subpixel.median:
+        with stage("median"):
+            result = refinement.median3(result)
 
     return MatchResult(disparity=result, labels=labels, seconds=seconds)

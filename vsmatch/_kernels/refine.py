@@ -1,0 +1,84 @@
+import numpy as np
+from numba import njit, prange
+
+from . import KERNEL_OPTIONS
+from .arms import DOWN, LEFT, RIGHT, UP
+from .disparity import VALID
+
+
+@njit(**KERNEL_OPTIONS)
+def region_vote(disp, labels, arms, n_disp, min_votes, min_share, out_disp, out_labels):
+    """One round of region voting (Mei et al. 2011).
+
+    A rejected pixel takes the most frequent disparity among the VALID pixels of its cross
+    support region (its vertical arm, then each of those pixels' horizontal arms) when more
+    than ``min_votes`` pixels vote and the winner's share exceeds ``min_share``; it then
+    becomes VALID. Reads the inputs only, so the result is the same on any thread count.
+    """
+    height, width = disp.shape
+    for y in prange(height):
+        hist = np.zeros(n_disp, dtype=np.int32)
+        for x in range(width):
+            out_disp[y, x] = disp[y, x]
+            out_labels[y, x] = labels[y, x]
+            if labels[y, x] == VALID:
+                continue
+            hist[:] = 0
+            total = 0
+            for yy in range(y - arms[y, x, UP], y + arms[y, x, DOWN] + 1):
+                for xx in range(x - arms[yy, x, LEFT], x + arms[yy, x, RIGHT] + 1):
+                    if labels[yy, xx] == VALID:
+                        hist[disp[yy, xx]] += 1
+                        total += 1
+            if total <= min_votes:
+                continue
+            best = 0
+            for d in range(1, n_disp):
+                if hist[d] > hist[best]:
+                    best = d
+            if hist[best] > min_share * total:
+                out_disp[y, x] = best
+                out_labels[y, x] = VALID
+
+
+@njit(**KERNEL_OPTIONS)
+def discontinuity_adjust(disp, volume, jump, out):
+    """On pixels where the disparity jumps by more than ``jump`` to a horizontal neighbour,
+    take the neighbour's disparity if its matching cost at this pixel is lower."""
+    height, width = disp.shape
+    for y in prange(height):
+        for x in range(width):
+            d = disp[y, x]
+            out[y, x] = d
+            if not np.isfinite(d):
+                continue
+            best_cost = volume[y, x, int(d)]
+            for nx in (x - 1, x + 1):
+                if nx < 0 or nx >= width:
+                    continue
+                nd = disp[y, nx]
+                if np.isfinite(nd) and abs(nd - d) > jump:
+                    c = volume[y, x, int(nd)]
+                    if c < best_cost:
+                        best_cost = c
+                        out[y, x] = nd
+
+
+@njit(**KERNEL_OPTIONS)
+def subpixel_parabola(disp, volume, out):
+    """Vertex of the parabola through the costs at d - 1, d, d + 1 (offset within +-0.5)."""
+    height, width, n_disp = volume.shape
+    for y in prange(height):
+        for x in range(width):
+            d = disp[y, x]
+            out[y, x] = d
+            if not np.isfinite(d):
+                continue
+            k = int(d)
+            if k <= 0 or k >= n_disp - 1:
+                continue
+            c0, c1, c2 = volume[y, x, k - 1], volume[y, x, k], volume[y, x, k + 1]
+            denom = c0 + c2 - 2.0 * c1
+            if denom > 1e-9:
+                offset = (c0 - c2) / (2.0 * denom)
+                out[y, x] = k + min(0.5, max(-0.5, offset))
