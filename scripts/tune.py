@@ -21,7 +21,7 @@ import numpy as np
 import yaml
 
 from vsmatch import datasets, evaluation, pipeline
-from vsmatch.config import config_from_dict, load_config
+from vsmatch.config import ConfigError, config_from_dict, load_config
 
 
 def objective(cfg, scene_sets) -> tuple[float, dict[str, float]]:
@@ -65,7 +65,12 @@ def main(argv=None) -> int:
                     continue
                 trial = copy.deepcopy(current)
                 trial[section][name] = value
-                score, parts = objective(config_from_dict(trial), scene_sets)
+                try:
+                    cfg = config_from_dict(trial)
+                except ConfigError as exc:
+                    print(f"round {rnd} {section}.{name}={value}: skipped ({exc})", flush=True)
+                    continue
+                score, parts = objective(cfg, scene_sets)
                 mark = ""
                 if score < best - 1e-9:
                     best, current, changed, mark = score, trial, True, "  <- kept"

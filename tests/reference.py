@@ -114,3 +114,57 @@ def lr_labels(dl, dr, n_disp, tol):
             passes = any(abs(dd - dr[y, x - dd]) <= tol for dd in range(min(n_disp, x + 1)))
             out[y, x] = 2 if passes else 1
     return out
+
+
+def scanline(cost, il, ir, p1, p2, tau, r1, r2):
+    """Mean of the four directional path costs, written out direction by direction."""
+    h, w, n = cost.shape
+    il = il.astype(float).reshape(h, w, -1)
+    ir = ir.astype(float).reshape(h, w, -1)
+    total = np.zeros((h, w, n))
+    for dy, dx in ((0, 1), (0, -1), (1, 0), (-1, 0)):
+        path = np.zeros((h, w, n))
+        ys = range(h) if dy >= 0 else range(h - 1, -1, -1)
+        xs = range(w) if dx >= 0 else range(w - 1, -1, -1)
+        for y in ys:
+            for x in xs:
+                py, px = y - dy, x - dx
+                if not (0 <= py < h and 0 <= px < w):
+                    path[y, x] = cost[y, x]
+                    continue
+                prev = path[py, px]
+                m = prev.min()
+                cl = np.abs(il[y, x] - il[py, px]).max() >= tau
+                for d in range(n):
+                    cr = True
+                    if x - d >= 0 and px - d >= 0:
+                        cr = np.abs(ir[y, x - d] - ir[py, px - d]).max() >= tau
+                    div = r2 if (cl and cr) else (r1 if (cl or cr) else 1.0)
+                    q1, q2 = p1 / div, p2 / div
+                    cands = [prev[d], m + q2]
+                    if d > 0:
+                        cands.append(prev[d - 1] + q1)
+                    if d < n - 1:
+                        cands.append(prev[d + 1] + q1)
+                    path[y, x, d] = cost[y, x, d] + min(cands) - m
+        total += path / 4
+    return total
+
+
+def region_vote_once(disp, labels, arms, n, min_votes, min_share):
+    h, w = disp.shape
+    out_d, out_l = disp.copy(), labels.copy()
+    for y in range(h):
+        for x in range(w):
+            if labels[y, x] == 0:
+                continue
+            votes = [disp[yy, xx]
+                     for yy in range(y - arms[y, x, 2], y + arms[y, x, 3] + 1)
+                     for xx in range(x - arms[yy, x, 0], x + arms[yy, x, 1] + 1)
+                     if labels[yy, xx] == 0]
+            if len(votes) <= min_votes:
+                continue
+            counts = np.bincount(votes, minlength=n)
+            if counts.max() > min_share * len(votes):
+                out_d[y, x], out_l[y, x] = counts.argmax(), 0
+    return out_d, out_l

@@ -95,3 +95,9 @@ def test_eval_json_has_the_documented_shape(data_dir, tmp_path):
     assert set(census["scenes"]["cones"]) == {"nonocc", "all", "disc", "seconds"}
     assert set(census["avg"]) == {"nonocc", "all", "disc"}
     assert (tmp_path / "imgs" / "census" / "teddy_error.png").exists()
+
+
+def test_ablation_refuses_several_methods(tmp_path):
+    result = invoke("eval", "--ablation", "--method", "paper", "--method", "census",
+                    "--data-root", tmp_path)
+    assert result.exit_code == 2 and "at most one" in result.output

@@ -135,9 +135,13 @@ def run(ctx, left, right, output, max_disp, config):
               help="Save each disparity (PFM, colour PNG) and an error image here.")
 @click.option("--threshold", type=float, default=1.0, show_default=True,
               help="A pixel is bad when its error exceeds this many pixels.")
+@click.option("--ablation", is_flag=True,
+              help="Instead of --method rows: the refinement chain of the config given by "
+                   "--method (default: 'default') built up one stage at a time, and the "
+                   "direction factor kappa switched.")
 @click.pass_context
 @friendly_errors
-def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, threshold):
+def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, threshold, ablation):
     """Score methods on a Middlebury dataset (bad pixels, nonocc / all / disc).
 
     \b
@@ -146,19 +150,24 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, threshold
     """
     from tqdm import tqdm
 
-    methods = methods or ("census", "paper", "default")
-    for name in methods:  # fail before any work on a bad config
-        load_config(name)
+    if ablation:
+        if len(methods) > 1:
+            raise click.BadParameter("--ablation takes at most one --method",
+                                     param_hint="'--method'")
+        configs = evaluation.ablation_configs(load_config(methods[0] if methods else None))
+    else:
+        # Loading each config first fails before any work on a bad one.
+        configs = {m: load_config(m) for m in (methods or ("census", "paper", "default"))}
     if json_path is not None:
         _check_output_path_any(Path(json_path))
     scenes = datasets.load_dataset(dataset, data_root)
     quiet = ctx.find_root().obj.get("quiet")
-    with tqdm(total=len(methods) * len(scenes), disable=quiet, unit="run",
+    with tqdm(total=len(configs) * len(scenes), disable=quiet, unit="run",
               leave=False) as bar:
         def done(method: str, scene: str) -> None:
             bar.set_postfix_str(f"{method}/{scene}")
             bar.update(1)
-        report = evaluation.evaluate(scenes, {m: m for m in methods}, dataset=dataset,
+        report = evaluation.evaluate(scenes, configs, dataset=dataset,
                                      threshold=threshold, out_dir=out_dir, on_done=done)
     _echo(ctx, evaluation.format_tables(report))
     if json_path is not None:

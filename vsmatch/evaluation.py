@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import re
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -10,7 +12,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .config import load_config
+from .config import Config, config_from_dict, load_config
 from .datasets import Scene
 from .io import colour_disparity, error_image, imwrite_atomic, write_atomic, write_disparity
 from .pipeline import match
@@ -76,7 +78,10 @@ def evaluate(scenes: list[Scene], methods: dict, *, dataset: str, threshold: flo
 
 
 def _safe_name(name: str) -> str:
-    return Path(name).stem if name.endswith((".yaml", ".yml")) else name
+    """A folder name for a method: a YAML path's stem, other characters made safe."""
+    if name.endswith((".yaml", ".yml")):
+        name = Path(name).stem
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "method"
 
 
 def save_scene_outputs(folder: Path, scene: Scene, disp: np.ndarray, threshold: float) -> None:
@@ -105,3 +110,37 @@ def format_tables(report: dict[str, Any]) -> str:
             lines.append(name.ljust(width) + "".join(f"{v:10.2f}" for v in cells))
         lines.append("")
     return "\n".join(lines).rstrip() + "\n"
+
+
+def ablation_configs(base: Config) -> dict[str, Config]:
+    """The refinement chain built up stage by stage from ``base``, then the direction factor.
+
+    The first row is ``base`` with every §5 stage off (§1-4, filling along the scanline);
+    each next row switches one stage on with ``base``'s values for it. The last row is
+    ``base`` with ``kappa`` changed, to 0 when ``base`` uses a non-zero kappa, else to 0.5,
+    so it shows what the direction factor adds.
+    """
+    def section(name: str, **changes) -> dict:
+        return {name: {**dataclasses.asdict(getattr(base, name)), **changes}}
+
+    steps = [
+        ("§1-4: cost, aggregation, LR check, fill",
+         {"scanline": {"enabled": False}, "voting": {"enabled": False},
+          "fill": {"directions": 2}, "discontinuity": {"enabled": False},
+          "subpixel": {"enabled": False, "median": False}}),
+        ("+ scanline optimisation", section("scanline", enabled=True)),
+        ("+ region voting", section("voting", enabled=True)),
+        ("+ 16-direction interpolation", section("fill", directions=16)),
+        ("+ discontinuity adjustment", section("discontinuity", enabled=True)),
+        ("+ sub-pixel", {"subpixel": {"enabled": True, "median": False}}),
+        ("+ 3x3 median", {"subpixel": {"enabled": True, "median": True}}),
+    ]
+    configs = {}
+    cfg = base
+    for label, change in steps:
+        cfg = config_from_dict(change, base=cfg)
+        configs[label] = cfg
+    other = 0.0 if base.arms.kappa != 0 else 0.5
+    configs[f"full chain, kappa = {other:g} (tuned: {base.arms.kappa:g})"] = config_from_dict(
+        {"arms": {"kappa": other}}, base=base)
+    return configs

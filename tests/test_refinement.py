@@ -1,0 +1,79 @@
+import numpy as np
+import pytest
+
+from vsmatch import optimization, refinement
+from vsmatch.config import DiscontinuityConfig, ScanlineConfig, VotingConfig
+
+import reference
+
+
+def test_scanline_matches_reference(rng):
+    h, w, n = 7, 9, 5
+    cost = rng.random((h, w, n), dtype=np.float32) * 2
+    left = rng.integers(0, 40, size=(h, w, 3), dtype=np.uint8)
+    right = rng.integers(0, 40, size=(h, w, 3), dtype=np.uint8)
+    cfg = ScanlineConfig(enabled=True, p1=0.5, p2=1.7, tau=20, reduce_one=4, reduce_both=10)
+    got = optimization.scanline_optimise(cost, left, right, cfg)
+    want = reference.scanline(cost, left, right, 0.5, 1.7, 20, 4, 10)
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-5)
+
+
+def test_scanline_smooths_an_isolated_wrong_minimum():
+    cost = np.ones((1, 9, 4), np.float32)
+    cost[0, :, 2] = 0.0
+    cost[0, 4, 2], cost[0, 4, 0] = 1.0, 0.5  # one pixel prefers d = 0
+    flat = np.zeros((1, 9, 3), np.uint8)
+    out = optimization.scanline_optimise(cost, flat, flat, ScanlineConfig(p1=1.0, p2=3.0))
+    assert out[0, 4].argmin() == 2
+
+
+def test_region_vote_matches_reference(rng):
+    h, w, n = 12, 14, 6
+    disp = rng.integers(0, n, size=(h, w)).astype(np.int32)
+    disp[:, 7:] = 3  # a consensus on the right half
+    labels = (rng.random((h, w)) < 0.3).astype(np.uint8)
+    arms = np.full((h, w, 4), 3, np.int32)
+    xs, ys = np.arange(w), np.arange(h)
+    arms[..., 0] = np.minimum(3, xs)[None]
+    arms[..., 1] = np.minimum(3, w - 1 - xs)[None]
+    arms[..., 2] = np.minimum(3, ys)[:, None]
+    arms[..., 3] = np.minimum(3, h - 1 - ys)[:, None]
+    cfg = VotingConfig(enabled=True, iterations=2, min_votes=8, min_share=0.4)
+    got_d, got_l = refinement.region_vote(disp, labels, arms, n_disp=n, cfg=cfg)
+    want_d, want_l = disp, labels
+    for _ in range(2):
+        want_d, want_l = reference.region_vote_once(want_d, want_l, arms, n, 8, 0.4)
+    np.testing.assert_array_equal(got_d, want_d)
+    np.testing.assert_array_equal(got_l, want_l)
+    assert got_l[:, 8:-3].sum() < labels[:, 8:-3].sum()  # the consensus fixed some
+
+
+def test_discontinuity_adjust_moves_an_edge_to_the_lower_cost():
+    disp = np.array([[2, 2, 2, 5, 5]], np.float32)
+    volume = np.ones((1, 5, 6), np.float32)
+    volume[0, 3, 2] = 0.1  # pixel 3 fits its left neighbour's disparity better
+    out = refinement.discontinuity_adjust(disp, volume, DiscontinuityConfig(jump=1.0))
+    assert out.tolist() == [[2, 2, 2, 2, 5]]
+
+
+@pytest.mark.parametrize("true_d", [2.0, 2.3, 1.7])
+def test_subpixel_finds_the_vertex_of_a_parabola(true_d):
+    d = np.arange(5, dtype=np.float32)
+    volume = ((d - true_d) ** 2).reshape(1, 1, 5).astype(np.float32)
+    disp = np.array([[round(true_d)]], np.float32)
+    np.testing.assert_allclose(refinement.subpixel(disp, volume), [[true_d]], atol=1e-5)
+
+
+def test_subpixel_keeps_the_range_ends_and_invalid():
+    volume = np.random.default_rng(1).random((1, 3, 4), dtype=np.float32)
+    disp = np.array([[0, 3, np.inf]], np.float32)
+    out = refinement.subpixel(disp, volume)
+    assert out[0, 0] == 0 and out[0, 1] == 3 and np.isinf(out[0, 2])
+
+
+def test_median3_keeps_invalid_pixels_apart():
+    disp = np.full((5, 5), 4.0, np.float32)
+    disp[2, 2] = 9.0
+    disp[0, 0] = np.inf
+    out = refinement.median3(disp)
+    assert out[2, 2] == 4.0 and np.isinf(out[0, 0]) and np.isfinite(out[1:, 1:]).all()
