@@ -17,7 +17,7 @@ def test_identical_images_give_zero_disparity(rng, config):
 
 
 @pytest.mark.parametrize("shift", [1, 3, 6])
-@pytest.mark.parametrize("config", ["paper", "census"])
+@pytest.mark.parametrize("config", ["paper", "census", "default"])
 def test_shifted_right_image_gives_the_shift(rng, shift, config):
     left, right = random_pair(rng, height=30, width=48, shift=shift)
     disp = vsmatch.match(left, right, max_disp=10, config=config)
@@ -26,6 +26,8 @@ def test_shifted_right_image_gives_the_shift(rng, shift, config):
         # A pixel darker than its whole window has census 0, as may another nearby:
         # census alone has ties that only aggregation resolves.
         assert np.mean(interior == shift) > 0.99
+    elif config == "default":  # sub-pixel: within half a pixel
+        assert np.all(np.abs(interior - shift) < 0.5)
     else:
         assert np.all(interior == shift)
 

@@ -139,9 +139,15 @@ def run(ctx, left, right, output, max_disp, config):
               help="Instead of --method rows: the refinement chain of the config given by "
                    "--method (default: 'default') built up one stage at a time, and the "
                    "direction factor kappa switched.")
+@click.option("--noise", default=None, metavar="LEVELS",
+              help="Also run with Gaussian noise of sigma = level x 255 added to each view, "
+                   "e.g. 0.02,0.05,0.10,0.15 (EVALUATION.md).")
+@click.option("--seeds", type=click.IntRange(min=1), default=3, show_default=True,
+              help="Noise seeds per level; figures are the mean over them.")
 @click.pass_context
 @friendly_errors
-def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, threshold, ablation):
+def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, threshold, ablation,
+                 noise, seeds):
     """Score methods on a Middlebury dataset (bad pixels, nonocc / all / disc).
 
     \b
@@ -160,20 +166,41 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, threshold
         configs = {m: load_config(m) for m in (methods or ("census", "paper", "default"))}
     if json_path is not None:
         _check_output_path_any(Path(json_path))
+    levels = _parse_levels(noise)
     scenes = datasets.load_dataset(dataset, data_root)
     quiet = ctx.find_root().obj.get("quiet")
-    with tqdm(total=len(configs) * len(scenes), disable=quiet, unit="run",
+    runs = len(configs) * len(scenes) * (1 + len(levels) * seeds)
+    with tqdm(total=runs, disable=quiet, unit="run",
               leave=False) as bar:
         def done(method: str, scene: str) -> None:
             bar.set_postfix_str(f"{method}/{scene}")
             bar.update(1)
         report = evaluation.evaluate(scenes, configs, dataset=dataset,
                                      threshold=threshold, out_dir=out_dir, on_done=done)
+        if levels:
+            evaluation.evaluate_noise(scenes, configs, report, levels=levels, seeds=seeds,
+                                      threshold=threshold, on_done=done)
     _echo(ctx, evaluation.format_tables(report))
+    if levels:
+        _echo(ctx, evaluation.format_noise_table(report))
     if json_path is not None:
         io.write_atomic(json_path, lambda tmp: Path(tmp).write_text(
             json.dumps(report, indent=2) + "\n", encoding="utf-8"))
         _echo(ctx, f"wrote {json_path}")
+
+
+def _parse_levels(text: str | None) -> list[float]:
+    if not text:
+        return []
+    try:
+        levels = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise click.BadParameter(f"'{text}' is not a comma-separated list of numbers",
+                                 param_hint="'--noise'") from None
+    if any(not 0 < v <= 1 for v in levels):
+        raise click.BadParameter(f"levels must be in (0, 1], got '{text}'",
+                                 param_hint="'--noise'")
+    return levels
 
 
 def _check_output_path_any(path: Path) -> None:

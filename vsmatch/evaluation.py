@@ -144,3 +144,62 @@ def ablation_configs(base: Config) -> dict[str, Config]:
     configs[f"full chain, kappa = {other:g} (tuned: {base.arms.kappa:g})"] = config_from_dict(
         {"arms": {"kappa": other}}, base=base)
     return configs
+
+
+def add_noise(image: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarray:
+    """Zero-mean Gaussian noise of sigma = ``level`` x 255, rounded and clipped to 0..255."""
+    noisy = image.astype(np.float64) + rng.standard_normal(image.shape) * (level * 255.0)
+    return np.clip(np.round(noisy), 0, 255).astype(np.uint8)
+
+
+def noisy_pair(scene: Scene, scene_index: int, level: float,
+               seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The scene's two views with independent noise, the same for a given (seed, scene).
+
+    The noise pattern depends on the seed, the scene and the view, not on the level, so the
+    levels differ only in strength (common random numbers).
+    """
+    return tuple(add_noise(view, level, np.random.default_rng((seed, scene_index, k)))
+                 for k, view in enumerate((scene.left, scene.right)))
+
+
+def evaluate_noise(scenes: list[Scene], methods: dict, report: dict[str, Any], *,
+                   levels: list[float], seeds: int, threshold: float = 1.0,
+                   on_done: Callable[[str, str], None] | None = None) -> dict[str, Any]:
+    """Add the noise protocol of EVALUATION.md to ``report`` (made by :func:`evaluate`).
+
+    For each method and level: the mean over ``seeds`` seeds (0 .. seeds-1) of the
+    four-scene averages, under ``"noise": {"<level>": {"avg": ..., "per_seed": [...]}}``.
+    """
+    for name, config in methods.items():
+        cfg = load_config(config)
+        noise = {}
+        for level in levels:
+            per_seed = []
+            for seed in range(seeds):
+                per_scene = {}
+                for index, scene in enumerate(scenes):
+                    left, right = noisy_pair(scene, index, level, seed)
+                    disp = match(left, right, max_disp=scene.max_disp, config=cfg)
+                    per_scene[scene.name] = score_scene(disp, scene, threshold)
+                    if on_done is not None:
+                        on_done(name, f"{scene.name} noise {level:g} seed {seed}")
+                per_seed.append(average(per_scene))
+            noise[f"{level:g}"] = {"avg": {m: float(np.mean([s[m] for s in per_seed]))
+                                           for m in MASKS},
+                                   "per_seed": per_seed}
+        report["methods"][name]["noise"] = noise
+    return report
+
+
+def format_noise_table(report: dict[str, Any], mask: str = "nonocc") -> str:
+    """A row per method: the noise-free average, then the mean over seeds at each level."""
+    methods = report["methods"]
+    levels = list(next(iter(methods.values())).get("noise", {}))
+    width = max(20, *(len(m) + 2 for m in methods))
+    lines = [f"{mask} bad {report['threshold']:.1f} (%) vs noise".ljust(width)
+             + f"{'none':>10}" + "".join(f"{float(lv) * 100:>9g}%" for lv in levels)]
+    for name, result in methods.items():
+        cells = [result["avg"][mask]] + [result["noise"][lv]["avg"][mask] for lv in levels]
+        lines.append(name.ljust(width) + "".join(f"{v:10.2f}" for v in cells))
+    return "\n".join(lines) + "\n"
