@@ -36,8 +36,24 @@ class CostConfig:
     # None switches a term off.
     lambda_gradient: float | None = _param(None, 0.01, 10000.0, nullable=True)
     lambda_ad: float | None = _param(None, 0.01, 1000.0, nullable=True)
-    # Gaussian sigma applied to the grey image before Sobel and census; 0 = off.
+    # Gaussian sigma applied to both views before every stage; 0 = off.
     presmooth_sigma: float = _param(0.0, 0.0, 5.0)
+
+
+@dataclass(frozen=True)
+class NoiseConfig:
+    """Adapting to the estimated image noise (``vsmatch.noise``); off unless ``adapt``.
+
+    Nothing changes while the estimated noise sigma (grey levels) stays at or below
+    ``floor``; above it, thresholds and lambdas grow and both views are smoothed in
+    proportion to the excess.
+    """
+
+    adapt: bool = _param(False)
+    floor: float = _param(3.0, 0.0, 50.0)
+    tau_per_sigma: float = _param(0.3, 0.0, 10.0)
+    lambda_per_sigma: float = _param(0.0, 0.0, 10.0)
+    smooth_per_sigma: float = _param(0.0, 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -129,6 +145,7 @@ class Config:
     """All parameters of the method, one section per pipeline stage."""
 
     cost: CostConfig = field(default_factory=CostConfig)
+    noise: NoiseConfig = field(default_factory=NoiseConfig)
     arms: ArmsConfig = field(default_factory=ArmsConfig)
     aggregation: AggregationConfig = field(default_factory=AggregationConfig)
     scanline: ScanlineConfig = field(default_factory=ScanlineConfig)

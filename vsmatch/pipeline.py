@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import aggregation, cost, disparity, optimization, refinement, sensitivity
+from . import aggregation, cost, disparity, noise, optimization, refinement, sensitivity
 from .config import Config, load_config
 from .images import to_grey
 
@@ -21,6 +21,8 @@ class MatchResult:
     disparity: np.ndarray
     labels: np.ndarray | None = None
     seconds: dict[str, float] = field(default_factory=dict)
+    config: Config | None = None  # as used, after any noise adaptation
+    noise_sigma: float | None = None  # estimated, when noise.adapt is on
 
 
 def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config) -> None:
@@ -85,9 +87,18 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
         yield
         seconds[name] = seconds.get(name, 0.0) + time.perf_counter() - start
 
+    noise_sigma = None
+    if cfg.noise.adapt:
+        with stage("noise"):
+            noise_sigma = 0.5 * (noise.estimate_noise(left) + noise.estimate_noise(right))
+            cfg = noise.adapt_to_noise(cfg, noise_sigma)
+    if cfg.cost.presmooth_sigma > 0:
+        with stage("presmooth"):
+            left = sensitivity.presmooth(left, cfg.cost.presmooth_sigma)
+            right = sensitivity.presmooth(right, cfg.cost.presmooth_sigma)
+
     with stage("cost"):
-        grey_l = sensitivity.presmooth(to_grey(left), cfg.cost.presmooth_sigma)
-        grey_r = sensitivity.presmooth(to_grey(right), cfg.cost.presmooth_sigma)
+        grey_l, grey_r = to_grey(left), to_grey(right)
         grad_l, theta_l = sensitivity.visual_sensitivity(grey_l)
         grad_r, theta_r = sensitivity.visual_sensitivity(grey_r)
         census_kw = dict(width=cfg.cost.census_width, height=cfg.cost.census_height)
@@ -141,4 +152,5 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
         with stage("median"):
             result = refinement.median3(result)
 
-    return MatchResult(disparity=result, labels=labels, seconds=seconds)
+    return MatchResult(disparity=result, labels=labels, seconds=seconds, config=cfg,
+                       noise_sigma=noise_sigma)

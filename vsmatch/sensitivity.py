@@ -6,11 +6,11 @@ import cv2
 import numpy as np
 
 
-def presmooth(grey: np.ndarray, sigma: float) -> np.ndarray:
-    """Small Gaussian blur before the sensitivity and census; sigma 0 leaves it as is."""
+def presmooth(image: np.ndarray, sigma: float) -> np.ndarray:
+    """Gaussian blur of a view before all stages (same dtype); sigma 0 leaves it as is."""
     if sigma <= 0:
-        return grey
-    return cv2.GaussianBlur(grey, (0, 0), sigmaX=sigma, sigmaY=sigma,
+        return image
+    return cv2.GaussianBlur(image, (0, 0), sigmaX=sigma, sigmaY=sigma,
                             borderType=cv2.BORDER_REFLECT_101)
 
 
