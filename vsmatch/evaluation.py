@@ -113,12 +113,13 @@ def format_tables(report: dict[str, Any]) -> str:
 
 
 def ablation_configs(base: Config) -> dict[str, Config]:
-    """The refinement chain built up stage by stage from ``base``, then the direction factor.
+    """The refinement chain built up stage by stage to ``base``, then two alternatives.
 
-    The first row is ``base`` with every §5 stage off (§1-4, filling along the scanline);
-    each next row switches one stage on with ``base``'s values for it. The last row is
-    ``base`` with ``kappa`` changed, to 0 when ``base`` uses a non-zero kappa, else to 0.5,
-    so it shows what the direction factor adds.
+    The first row is ``base`` with every §5 stage off (§1-4); each next row switches one
+    stage on with ``base``'s values for it, so the last of them is ``base`` itself. Then
+    ``base`` with the other filling (16 search directions, the "proper interpolation" of
+    §5.3, or 2 when ``base`` uses more), and ``base`` with the direction factor ``kappa``
+    at 0 (or at 0.5 when ``base`` has 0).
     """
     def section(name: str, **changes) -> dict:
         return {name: {**dataclasses.asdict(getattr(base, name)), **changes}}
@@ -126,11 +127,9 @@ def ablation_configs(base: Config) -> dict[str, Config]:
     steps = [
         ("§1-4: cost, aggregation, LR check, fill",
          {"scanline": {"enabled": False}, "voting": {"enabled": False},
-          "fill": {"directions": 2}, "discontinuity": {"enabled": False},
-          "subpixel": {"enabled": False, "median": False}}),
+          "discontinuity": {"enabled": False}, "subpixel": {"enabled": False, "median": False}}),
         ("+ scanline optimisation", section("scanline", enabled=True)),
         ("+ region voting", section("voting", enabled=True)),
-        ("+ 16-direction interpolation", section("fill", directions=16)),
         ("+ discontinuity adjustment", section("discontinuity", enabled=True)),
         ("+ sub-pixel", {"subpixel": {"enabled": True, "median": False}}),
         ("+ 3x3 median", {"subpixel": {"enabled": True, "median": True}}),
@@ -140,9 +139,12 @@ def ablation_configs(base: Config) -> dict[str, Config]:
     for label, change in steps:
         cfg = config_from_dict(change, base=cfg)
         configs[label] = cfg
-    other = 0.0 if base.arms.kappa != 0 else 0.5
-    configs[f"full chain, kappa = {other:g} (tuned: {base.arms.kappa:g})"] = config_from_dict(
-        {"arms": {"kappa": other}}, base=base)
+    directions = 16 if base.fill.directions == 2 else 2
+    configs[f"full chain, fill from {directions} directions"] = config_from_dict(
+        {"fill": {"directions": directions}}, base=base)
+    kappa = 0.0 if base.arms.kappa != 0 else 0.5
+    configs[f"full chain, kappa = {kappa:g} (tuned: {base.arms.kappa:g})"] = config_from_dict(
+        {"arms": {"kappa": kappa}}, base=base)
     return configs
 
 
