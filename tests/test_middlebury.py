@@ -32,6 +32,19 @@ def test_paper_method_on_middlebury2(middlebury2):
     assert all(s["nonocc"] < 7.0 for s in scenes.values())
 
 
+def test_default_chain_on_middlebury2(middlebury2):
+    avg, scenes = mean_nonocc(middlebury2, "default")
+    assert avg <= 2.7  # measured 2.48; the paper 3.82
+    assert scenes["venus"]["nonocc"] < 1.0 and scenes["teddy"]["nonocc"] < 4.8
+
+
+def test_default_chain_on_middlebury_third(data_dir):
+    scenes = datasets.load_dataset("middlebury-third", data_dir)
+    avg, per_scene = mean_nonocc(scenes, "default")
+    assert avg <= 6.0  # measured 5.71; the issue asks <= 9.0
+    assert max(s["nonocc"] for s in per_scene.values()) < 14.0  # Laundry, 12.75
+
+
 def test_middlebury2_masks_and_ranges(middlebury2):
     for scene in middlebury2:
         nonocc, all_, disc = (scene.masks[m] for m in ("nonocc", "all", "disc"))

@@ -40,3 +40,45 @@ def test_noise_report_shape(data_dir):
     assert noise["0.05"]["avg"]["nonocc"] == pytest.approx(np.mean(per_seed))
     assert noise["0.05"]["avg"]["nonocc"] > report["methods"]["census"]["avg"]["nonocc"]
     assert "vs noise" in evaluation.format_noise_table(report)
+
+
+@pytest.mark.parametrize("sigma", [0.0, 3.0, 8.0, 20.0])
+def test_estimate_noise_recovers_added_grey_noise(sigma):
+    from vsmatch.noise import estimate_noise
+
+    rng = np.random.default_rng(0)
+    ys, xs = np.mgrid[0:200, 0:240]
+    clean = 60 + 0.3 * xs + 0.2 * ys  # a smooth ramp: no noise of its own
+    noisy = clean + rng.standard_normal(clean.shape) * sigma
+    image = np.clip(np.round(noisy), 0, 255).astype(np.uint8)
+    assert estimate_noise(image) == pytest.approx(sigma, abs=0.15 * sigma + 0.5)
+
+
+def test_adapt_to_noise_changes_nothing_below_the_floor_or_when_off():
+    from vsmatch.config import config_from_dict
+    from vsmatch.noise import adapt_to_noise
+
+    cfg = config_from_dict({"noise": {"adapt": True, "floor": 3.0, "tau_per_sigma": 0.5,
+                                      "lambda_per_sigma": 0.1, "smooth_per_sigma": 0.1},
+                            "cost": {"lambda_ad": 30.0, "lambda_gradient": 100.0}})
+    assert adapt_to_noise(cfg, 2.9) == cfg
+    off = config_from_dict({"noise": {"adapt": False}})
+    assert adapt_to_noise(off, 20.0) == off
+    noisy = adapt_to_noise(cfg, 7.0)  # excess 4
+    assert noisy.arms.tau1 == pytest.approx(cfg.arms.tau1 * 3.0)
+    assert noisy.scanline.tau == pytest.approx(cfg.scanline.tau * 3.0)
+    assert noisy.cost.lambda_ad == pytest.approx(90.0)
+    assert noisy.cost.lambda_census == pytest.approx(cfg.cost.lambda_census * 1.4)
+    assert noisy.cost.presmooth_sigma == pytest.approx(0.4)
+
+
+def test_pipeline_reports_the_adapted_config(rng):
+    from vsmatch import pipeline
+    from vsmatch.config import config_from_dict
+
+    from conftest import random_pair
+
+    left, right = random_pair(rng, height=40, width=60, shift=3)
+    cfg = config_from_dict({"noise": {"adapt": True, "floor": 0.0}})
+    result = pipeline.run(left, right, max_disp=6, config=cfg)
+    assert result.noise_sigma > 0 and result.config.arms.tau1 > cfg.arms.tau1
