@@ -3,7 +3,7 @@
 import numpy as np
 
 
-def census(grey, half_w, half_h):
+def census(grey, half_w, half_h, band=0.0):
     h, w = grey.shape
     out = np.zeros((h, w), dtype=np.uint64)
     for y in range(h):
@@ -14,7 +14,7 @@ def census(grey, half_w, half_h):
                     if dy == 0 and dx == 0:
                         continue
                     q = grey[min(max(y + dy, 0), h - 1), min(max(x + dx, 0), w - 1)]
-                    bits = (bits << 1) | int(q < grey[y, x])
+                    bits = (bits << 1) | int(q < grey[y, x] - band)
             out[y, x] = bits
     return out
 

@@ -8,12 +8,13 @@ from vsmatch.config import CostConfig
 import reference
 
 
-@pytest.mark.parametrize("width,height", [(9, 7), (3, 3), (5, 9), (1, 3)])
-def test_census_matches_reference(rng, width, height):
+@pytest.mark.parametrize("width,height,band", [(9, 7, 0.0), (3, 3, 0.0), (5, 9, 0.0),
+                                               (1, 3, 0.0), (9, 7, 1.5)])
+def test_census_matches_reference(rng, width, height, band):
     grey = rng.integers(0, 8, size=(11, 13)).astype(np.float32)  # many ties
-    got = cost.census_transform(grey, width=width, height=height)
+    got = cost.census_transform(grey, width=width, height=height, band=band)
     assert got.dtype == np.uint64
-    np.testing.assert_array_equal(got, reference.census(grey, width // 2, height // 2))
+    np.testing.assert_array_equal(got, reference.census(grey, width // 2, height // 2, band))
 
 
 def test_census_rejects_even_or_too_large_window():

@@ -56,20 +56,38 @@ def test_estimate_noise_recovers_added_grey_noise(sigma):
 
 def test_adapt_to_noise_changes_nothing_below_the_floor_or_when_off():
     from vsmatch.config import config_from_dict
-    from vsmatch.noise import adapt_to_noise
+    from vsmatch.noise import adapt_to_noise, smoothed_noise_factor
 
-    cfg = config_from_dict({"noise": {"adapt": True, "floor": 3.0, "tau_per_sigma": 0.5,
+    cfg = config_from_dict({"noise": {"adapt": True, "floor": 3.0, "tau_per_sigma": 2.0,
                                       "lambda_per_sigma": 0.1, "smooth_per_sigma": 0.1},
                             "cost": {"lambda_ad": 30.0, "lambda_gradient": 100.0}})
     assert adapt_to_noise(cfg, 2.9) == cfg
     off = config_from_dict({"noise": {"adapt": False}})
     assert adapt_to_noise(off, 20.0) == off
-    noisy = adapt_to_noise(cfg, 7.0)  # excess 4
-    assert noisy.arms.tau1 == pytest.approx(cfg.arms.tau1 * 3.0)
-    assert noisy.scanline.tau == pytest.approx(cfg.scanline.tau * 3.0)
-    assert noisy.cost.lambda_ad == pytest.approx(90.0)
-    assert noisy.cost.lambda_census == pytest.approx(cfg.cost.lambda_census * 1.4)
-    assert noisy.cost.presmooth_sigma == pytest.approx(0.4)
+    noisy = adapt_to_noise(cfg, 7.0)  # past the ramp: full gain, smoothing 0.7
+    residual = 7.0 * smoothed_noise_factor(0.7)
+    assert noisy.cost.presmooth_sigma == pytest.approx(0.7)
+    assert noisy.arms.tau1 == pytest.approx(cfg.arms.tau1 + 2.0 * residual)
+    assert noisy.arms.tau3 == pytest.approx(cfg.arms.tau3 + 2.0 * residual)
+    assert noisy.scanline.tau == pytest.approx(cfg.scanline.tau + 2.0 * residual)
+    assert noisy.cost.lambda_ad == pytest.approx(30.0 + 2.0 * residual)
+    assert noisy.cost.lambda_census == pytest.approx(cfg.cost.lambda_census
+                                                     * (1 + 0.1 * residual))
+    half = adapt_to_noise(cfg, 3.5)  # halfway up the ramp (floor 3, ramp 1)
+    assert half.cost.presmooth_sigma == pytest.approx(0.5 * 0.1 * 3.5)
+
+
+@pytest.mark.parametrize("blur", [0.5, 1.0, 2.0])
+def test_smoothed_noise_factor_matches_a_blurred_noise_field(blur):
+    import cv2
+
+    from vsmatch.noise import smoothed_noise_factor
+
+    noise = np.random.default_rng(0).standard_normal((400, 400)).astype(np.float32) * 20
+    blurred = cv2.GaussianBlur(noise, (int(round(blur * 6 + 1)) | 1,) * 2, blur)
+    measured = blurred[20:-20, 20:-20].std() / noise.std()
+    assert smoothed_noise_factor(blur) == pytest.approx(measured, rel=0.05)
+    assert smoothed_noise_factor(0.0) == 1.0
 
 
 def test_pipeline_reports_the_adapted_config(rng):

@@ -32,6 +32,8 @@ class CostConfig:
 
     census_width: int = _param(9, 1, 15)
     census_height: int = _param(7, 1, 15)
+    # A neighbour sets its census bit only when darker than the centre by more than this.
+    census_band: float = _param(0.0, 0.0, 64.0)
     lambda_census: float = _param(30.0, 0.01, 1000.0)
     # None switches a term off.
     lambda_gradient: float | None = _param(None, 0.01, 10000.0, nullable=True)
@@ -45,15 +47,17 @@ class NoiseConfig:
     """Adapting to the estimated image noise (``vsmatch.noise``); off unless ``adapt``.
 
     Nothing changes while the estimated noise sigma (grey levels) stays at or below
-    ``floor``; above it, thresholds and lambdas grow and both views are smoothed in
-    proportion to the excess.
+    ``floor``; above it, fading in over ``ramp`` grey levels, both views are smoothed and
+    thresholds and lambdas grow with the noise (``vsmatch.noise.adapt_to_noise``).
     """
 
     adapt: bool = _param(False)
-    floor: float = _param(3.0, 0.0, 50.0)
-    tau_per_sigma: float = _param(0.3, 0.0, 10.0)
+    floor: float = _param(2.5, 0.0, 50.0)
+    ramp: float = _param(1.0, 0.01, 50.0)
+    tau_per_sigma: float = _param(2.0, 0.0, 20.0)
     lambda_per_sigma: float = _param(0.0, 0.0, 10.0)
     smooth_per_sigma: float = _param(0.0, 0.0, 1.0)
+    band_per_sigma: float = _param(0.0, 0.0, 10.0)
 
 
 @dataclass(frozen=True)

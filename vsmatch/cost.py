@@ -14,18 +14,20 @@ from .config import CostConfig
 from .images import as_channels
 
 
-def census_transform(grey: np.ndarray, *, width: int = 9, height: int = 7) -> np.ndarray:
+def census_transform(grey: np.ndarray, *, width: int = 9, height: int = 7,
+                     band: float = 0.0) -> np.ndarray:
     """Census bit strings (uint64, (H, W)) over a ``width`` x ``height`` window.
 
     Bit order: window neighbours row by row, centre skipped, the first one in the highest
-    used bit; a bit is set when the neighbour is darker than the centre.
+    used bit; a bit is set when the neighbour is darker than the centre by more than
+    ``band`` grey levels (a dead band keeps noise from flipping bits in flat regions).
     """
     if width % 2 == 0 or height % 2 == 0 or width * height - 1 > 64:
         raise ValueError(f"census window {width}x{height} must be odd-sized with at most "
                          "64 neighbours")
     grey = np.ascontiguousarray(grey, dtype=np.float32)
     out = np.empty(grey.shape, dtype=np.uint64)
-    _census_kernel(grey, width // 2, height // 2, out)
+    _census_kernel(grey, width // 2, height // 2, np.float32(band), out)
     return out
 
 

@@ -101,7 +101,8 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
         grey_l, grey_r = to_grey(left), to_grey(right)
         grad_l, theta_l = sensitivity.visual_sensitivity(grey_l)
         grad_r, theta_r = sensitivity.visual_sensitivity(grey_r)
-        census_kw = dict(width=cfg.cost.census_width, height=cfg.cost.census_height)
+        census_kw = dict(width=cfg.cost.census_width, height=cfg.cost.census_height,
+                         band=cfg.cost.census_band)
         volume = cost.cost_volume(left, right,
                                   cost.census_transform(grey_l, **census_kw),
                                   cost.census_transform(grey_r, **census_kw),

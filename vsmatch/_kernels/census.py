@@ -5,15 +5,15 @@ from . import KERNEL_OPTIONS
 
 
 @njit(**KERNEL_OPTIONS)
-def census_transform(grey, half_w, half_h, out):
-    """One bit per window neighbour q (row-major, centre skipped): [g(q) < g(p)].
+def census_transform(grey, half_w, half_h, band, out):
+    """One bit per window neighbour q (row-major, centre skipped): [g(q) < g(p) - band].
 
     Pixels outside the image repeat the nearest border pixel.
     """
     height, width = grey.shape
     for y in prange(height):
         for x in range(width):
-            centre = grey[y, x]
+            centre = grey[y, x] - band
             bits = np.uint64(0)
             for dy in range(-half_h, half_h + 1):
                 yy = min(max(y + dy, 0), height - 1)
