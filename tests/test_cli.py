@@ -49,22 +49,117 @@ def test_run_with_a_config_file(pair_files, tmp_path):
     assert result.exit_code == 0, result.output
 
 
+@pytest.fixture
+def bad_inputs(pair_files, tmp_path):
+    """Broken inputs beside the good pair, in the working folder."""
+    (tmp_path / "text.png").write_text("this is not an image")
+    good = (tmp_path / "l.png").read_bytes()
+    (tmp_path / "trunc.png").write_bytes(good[: len(good) // 2])
+    cv2.imwrite(str(tmp_path / "small.png"), np.zeros((32, 40, 3), np.uint8))
+    cv2.imwrite(str(tmp_path / "tiny_l.png"), np.zeros((5, 30, 3), np.uint8))
+    cv2.imwrite(str(tmp_path / "tiny_r.png"), np.zeros((5, 30, 3), np.uint8))
+    (tmp_path / "broken.yaml").write_text("arms: [1, 2\n")
+    (tmp_path / "unknown.yaml").write_text("arms:\n  tau9: 3\n")
+    (tmp_path / "range.yaml").write_text("arms:\n  tau1: 999\n")
+    (tmp_path / "afile").write_text("")
+    return tmp_path
+
+
 @pytest.mark.parametrize("args,code,message", [
-    (["MISSING", "r.png", "-o", "d.pfm"], 1, "file not found"),
+    (["MISSING.png", "r.png", "-o", "d.pfm"], 1, "MISSING.png: file not found"),
+    (["text.png", "r.png", "-o", "d.pfm"], 1, "text.png: not a readable image"),
+    (["trunc.png", "r.png", "-o", "d.pfm"], 1, "trunc.png: not a readable image"),
+    (["l.png", "small.png", "-o", "d.pfm"], 1, "differ in size"),
+    (["tiny_l.png", "tiny_r.png", "-o", "d.pfm", "--max-disp", "4"], 1,
+     "smaller than the census window"),
     (["l.png", "r.png", "-o", "d.tif"], 2, "must end in .pfm"),
     (["l.png", "r.png", "-o", "d.pfm", "--max-disp", "0"], 2, "must be at least 1"),
+    (["l.png", "r.png", "-o", "d.pfm", "--max-disp", "-3"], 2, "must be at least 1"),
     (["l.png", "r.png", "-o", "d.pfm", "--max-disp", "48"], 2, "less than the image width"),
-    (["l.png", "r.png", "-o", "nodir/d.pfm"], 1, "does not exist"),
+    (["l.png", "r.png", "-o", "d.pfm", "--max-disp", "x"], 2, "'x' is not a valid integer"),
+    (["l.png", "r.png", "-o", "d.pfm", "--config", "broken.yaml"], 1, "not valid YAML"),
+    (["l.png", "r.png", "-o", "d.pfm", "--config", "unknown.yaml"], 1,
+     "unknown config key 'arms.tau9'"),
+    (["l.png", "r.png", "-o", "d.pfm", "--config", "range.yaml"], 1,
+     "arms.tau1 = 999.0 is out of range [0.0, 255.0]"),
     (["l.png", "r.png", "-o", "d.pfm", "--config", "nonsense"], 1, "neither a bundled"),
+    (["l.png", "r.png", "-o", "nodir/d.pfm"], 1, "does not exist"),
+    (["l.png", "r.png", "-o", "afile/d.pfm"], 1, "does not exist"),
 ])
-def test_run_errors_are_one_line_without_output(pair_files, tmp_path, monkeypatch,
-                                                args, code, message):
-    monkeypatch.chdir(tmp_path)
+def test_run_errors_are_one_line_without_output(bad_inputs, monkeypatch, args, code, message):
+    monkeypatch.chdir(bad_inputs)
+    before = set(bad_inputs.iterdir())
     result = invoke("run", *args)
     assert result.exit_code == code, result.output
     assert message in result.output
     assert "Traceback" not in result.output
-    assert not (tmp_path / "d.pfm").exists() and not (tmp_path / "d.tif").exists()
+    assert len(result.output.strip().splitlines()) == 1
+    assert set(bad_inputs.iterdir()) == before  # nothing written, no temporary left
+
+
+def test_unwritable_output_folder(pair_files, tmp_path, monkeypatch):
+    # As root every folder is writable, so the permission answer is simulated.
+    monkeypatch.setattr("vsmatch.cli._writable", lambda folder: False)
+    result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm")
+    assert result.exit_code == 1 and "is not writable" in result.output
+
+
+def test_truncated_image_error_is_one_line_in_a_real_process(bad_inputs):
+    """libpng prints its own complaint unless OpenCV's logging is silenced."""
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "vsmatch", "run", "trunc.png", "r.png",
+                           "-o", "d.pfm"], cwd=bad_inputs, capture_output=True, text=True)
+    assert proc.returncode == 1
+    assert proc.stderr.strip().splitlines() == ["Error: trunc.png: not a readable image "
+                                                "(unknown format, or truncated)"]
+    assert not (bad_inputs / "d.pfm").exists()
+
+
+@pytest.mark.parametrize("convert", [
+    lambda a: cv2.cvtColor(a, cv2.COLOR_BGR2GRAY),
+    lambda a: a.astype(np.uint16) * 257,
+    lambda a: cv2.cvtColor(a, cv2.COLOR_BGR2BGRA),
+])
+def test_grey_16bit_and_rgba_pairs_are_matched(pair_files, tmp_path, convert):
+    for path in pair_files:
+        cv2.imwrite(str(path), convert(cv2.imread(str(path))))
+    result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm", "--max-disp", 8,
+                    "--config", "paper")
+    assert result.exit_code == 0, result.output
+    assert np.all(io.read_disparity(tmp_path / "d.pfm")[5:-5, 12:-5] == 3)
+
+
+def test_interrupt_exits_130_without_output(pair_files, tmp_path, monkeypatch):
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("vsmatch.pipeline.run", interrupted)
+    result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm", "--max-disp", 8)
+    assert result.exit_code == 130 and "interrupted" in result.output
+    assert not (tmp_path / "d.pfm").exists()
+
+
+def test_interrupt_while_writing_leaves_no_file(pair_files, tmp_path, monkeypatch):
+    real_imwrite = cv2.imwrite
+
+    def write_then_interrupt(path, image):
+        real_imwrite(path, image)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("vsmatch.io.cv2.imwrite", write_then_interrupt)
+    result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm", "--max-disp", 8)
+    assert result.exit_code == 130
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["l.png", "r.png"]
+
+
+def test_quiet_and_verbose(pair_files, tmp_path):
+    quiet = invoke("--quiet", "run", *pair_files, "-o", tmp_path / "q.pfm", "--max-disp", 8)
+    assert quiet.exit_code == 0 and quiet.output == ""
+    loud = invoke("--verbose", "run", *pair_files, "-o", tmp_path / "v.pfm", "--max-disp", 8)
+    assert loud.exit_code == 0
+    assert "estimated noise" in loud.output and "seconds:" in loud.output
 
 
 def test_demo_writes_its_outputs(tmp_path):

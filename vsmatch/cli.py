@@ -1,8 +1,8 @@
 """The ``vsmatch`` command: thin wrappers over the library.
 
-Exit status: 0 success; 1 a problem with the inputs, data or outputs (one line on stderr,
-no traceback, no output file left behind); 2 a usage error (bad option or argument);
-130 interrupted (Ctrl-C).
+Exit status: 0 success; 1 a problem with the inputs, data, config or outputs (one line on
+stderr, no traceback, no output file left behind); 2 a usage error (bad option or
+argument); 130 interrupted (Ctrl-C).
 """
 
 from __future__ import annotations
@@ -10,21 +10,28 @@ from __future__ import annotations
 import functools
 import json
 import os
+import sys
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 import click
 
-from . import __version__, datasets, evaluation, io, pipeline, synthetic
+from . import __version__, batch, datasets, evaluation, io, pipeline, synthetic
 from .config import ConfigError, bundled_config_names, load_config
 
 #: ``--max-disp`` when none is given.
 DEFAULT_MAX_DISP = 64
 
-EXPECTED_ERRORS = (ConfigError, io.ImageError, datasets.DatasetError, ValueError, OSError)
+EXPECTED_ERRORS = (ConfigError, io.ImageError, datasets.DatasetError, batch.BatchError,
+                   ValueError, OSError)
+
+#: Exit status after Ctrl-C (128 + SIGINT), as shells report it.
+EXIT_INTERRUPTED = 130
 
 
 def friendly_errors(func):
-    """Turn the library's expected errors into one-line ClickExceptions (exit 1)."""
+    """Turn the library's expected errors into one-line ClickExceptions (exit 1), and
+    Ctrl-C into a one-line notice with exit status 130."""
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         try:
@@ -33,6 +40,9 @@ def friendly_errors(func):
             raise
         except EXPECTED_ERRORS as exc:
             raise click.ClickException(_one_line(exc)) from None
+        except KeyboardInterrupt:
+            click.echo("vsmatch: interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
     return wrapper
 
 
@@ -44,6 +54,11 @@ def _one_line(exc: BaseException) -> str:
 def _echo(ctx: click.Context, message: str, *, err: bool = False) -> None:
     if not ctx.find_root().obj.get("quiet"):
         click.echo(message, err=err)
+
+
+def _verbose(ctx: click.Context, message: str) -> None:
+    if ctx.find_root().obj.get("verbose"):
+        click.echo(message, err=True)
 
 
 def config_option(func):
@@ -60,11 +75,34 @@ def data_root_option(func):
              "$VSMATCH_DATA, else ./data, else ../shared/data.")(func)
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class OneLineErrors(click.Group):
+    """A group whose every error is one line on stderr: Click's usage errors too, which
+    it would otherwise print over four lines with the usage text."""
+
+    def main(self, *args, **kwargs):
+        kwargs["standalone_mode"] = False
+        try:
+            result = super().main(*args, **kwargs)
+        except click.UsageError as exc:
+            where = exc.ctx.command_path if exc.ctx is not None else "vsmatch"
+            click.echo(f"Error: {exc.format_message()} (see '{where} --help')", err=True)
+            sys.exit(exc.exit_code)
+        except click.ClickException as exc:
+            exc.show()
+            sys.exit(exc.exit_code)
+        except (click.Abort, KeyboardInterrupt):
+            click.echo("vsmatch: interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        sys.exit(result if isinstance(result, int) else 0)
+
+
+@click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="vsmatch")
 @click.option("-q", "--quiet", is_flag=True, help="Print only errors.")
+@click.option("-v", "--verbose", is_flag=True,
+              help="Also print stage times and the estimated noise (on stderr).")
 @click.pass_context
-def main(ctx: click.Context, quiet: bool) -> None:
+def main(ctx: click.Context, quiet: bool, verbose: bool) -> None:
     """Dense stereo matching guided by visual sensitive information.
 
     Wang, Pathan and Dev, "Stereo Matching Based on Visual Sensitive Information",
@@ -73,6 +111,18 @@ def main(ctx: click.Context, quiet: bool) -> None:
     """
     ctx.ensure_object(dict)
     ctx.obj["quiet"] = quiet
+    ctx.obj["verbose"] = verbose and not quiet
+    _silence_opencv()
+
+
+def _silence_opencv() -> None:
+    """Keep OpenCV's decoders (libpng, ...) from printing beside our one-line errors."""
+    import cv2
+
+    try:
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    except AttributeError:  # an OpenCV build without the logging module
+        pass
 
 
 def _check_output_path(path: Path) -> None:
@@ -83,8 +133,12 @@ def _check_output_path(path: Path) -> None:
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise click.ClickException(f"{path}: output folder '{folder}' does not exist")
-    if not os.access(folder, os.W_OK):
+    if not _writable(folder):
         raise click.ClickException(f"{path}: output folder '{folder}' is not writable")
+
+
+def _writable(folder: Path) -> bool:
+    return os.access(folder, os.W_OK)
 
 
 @main.command()
@@ -111,15 +165,30 @@ def run(ctx, left, right, output, max_disp, config):
     cfg = load_config(config)
     if max_disp <= 0:
         raise click.BadParameter(f"{max_disp} must be at least 1", param_hint="'--max-disp'")
-    left_image = io.read_image(left)
-    right_image = io.read_image(right)
+    left_image, right_image = io.read_pair(left, right)
     width = left_image.shape[1]
     if max_disp >= width:
         raise click.BadParameter(f"{max_disp} must be less than the image width ({width})",
                                  param_hint="'--max-disp'")
-    disp = pipeline.match(left_image, right_image, max_disp=max_disp, config=cfg)
-    io.write_disparity(out, disp)
+    try:
+        pipeline.check_pair(left_image, right_image, max_disp, cfg)
+    except ValueError as exc:
+        raise click.ClickException(f"{left}: {exc}") from None
+    result = pipeline.run(left_image, right_image, max_disp=max_disp, config=cfg)
+    io.write_disparity(out, result.disparity)
+    _report_run(ctx, result)
     _echo(ctx, f"wrote {out}")
+
+
+def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
+    """Under --verbose: the estimated noise and the stage times."""
+    if result.noise_sigma is not None:
+        floor = result.config.noise.floor
+        action = "adapted" if result.noise_sigma > floor else "no adaptation"
+        _verbose(ctx, f"estimated noise: {result.noise_sigma:.2f} grey levels "
+                      f"(floor {floor:g}: {action})")
+    times = ", ".join(f"{k} {v:.3f}" for k, v in result.seconds.items())
+    _verbose(ctx, f"seconds: {times}; total {sum(result.seconds.values()):.3f}")
 
 
 @main.command("eval")
@@ -207,6 +276,73 @@ def _check_output_path_any(path: Path) -> None:
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise click.ClickException(f"{path}: output folder '{folder}' does not exist")
+
+
+@main.command("batch")
+@click.argument("source", type=click.Path())
+@click.option("-o", "--out-dir", type=click.Path(file_okay=False), default="vsmatch-out",
+              show_default=True, help="For a folder SOURCE: where the disparities go "
+              "(created if missing). A CSV names each output itself.")
+@click.option("--format", "fmt", type=click.Choice(["pfm", "png"]), default="pfm",
+              show_default=True, help="Output format for a folder SOURCE.")
+@click.option("--max-disp", type=click.IntRange(min=1), default=DEFAULT_MAX_DISP,
+              show_default=True, help="Largest disparity searched, for pairs that do not "
+              "give their own (CSV column 4).")
+@config_option
+@click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Pairs matched at once, each in its own process.")
+@click.option("--overwrite", is_flag=True, help="Match pairs whose output already exists.")
+@click.pass_context
+@friendly_errors
+def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, overwrite):
+    """Match every pair listed in a CSV file or found in a folder.
+
+    \b
+    A CSV has rows left,right,output[,max_disp] (paths relative to the CSV's folder;
+    an optional header row starting with 'left'). A folder holds one sub-folder per
+    pair (imL/imR, im0/im1, view1/view5 or left/right images), or files NAME_left.png
+    and NAME_right.png side by side; each disparity goes to OUT_DIR/NAME.pfm.
+
+    Pairs whose output exists are skipped unless --overwrite. A failed pair does not
+    stop the others: the failures are listed at the end and the exit status is 1.
+
+    \b
+    Example:
+      vsmatch batch pairs.csv --jobs 2
+      vsmatch batch scenes/ -o disparities --format png --max-disp 100
+    """
+    from tqdm import tqdm
+
+    cfg = load_config(config)
+    src = Path(source)
+    if src.is_dir():
+        Path(out_dir).mkdir(parents=True, exist_ok=True)
+        jobs_list = batch.find_pairs(src, out_dir, max_disp=max_disp, suffix=f".{fmt}")
+    elif src.is_file():
+        jobs_list = batch.read_pair_list(src, max_disp)
+    else:
+        raise click.ClickException(f"{src}: no such file or folder")
+    if not jobs_list:
+        raise click.ClickException(f"{src}: no stereo pairs found")
+    todo = [j for j in jobs_list if overwrite or not j.output.exists()]
+    skipped = len(jobs_list) - len(todo)
+    quiet = ctx.find_root().obj.get("quiet")
+    with tqdm(total=len(todo), disable=quiet, unit="pair", leave=False) as bar:
+        def done(job: batch.PairJob, error: str | None) -> None:
+            bar.set_postfix_str(job.output.name)
+            bar.update(1)
+        try:
+            failures = batch.run_batch(todo, cfg, workers=jobs, on_done=done)
+        except BrokenProcessPool:
+            raise click.ClickException("a worker process died (out of memory?); "
+                                       "outputs written so far are complete") from None
+    _echo(ctx, f"matched {len(todo) - len(failures)} of {len(jobs_list)} pairs"
+               + (f", skipped {skipped} with existing output" if skipped else "")
+               + (f", {len(failures)} failed" if failures else ""))
+    for job, error in failures:
+        click.echo(f"failed: {job.left}: {error}", err=True)
+    if failures:
+        sys.exit(1)
 
 
 @main.command()

@@ -53,6 +53,15 @@ def read_image(path: str | Path) -> np.ndarray:
     return np.ascontiguousarray(image)
 
 
+def read_pair(left_path: str | Path, right_path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Both views of a stereo pair (see :func:`read_image`), which must be one size."""
+    left, right = read_image(left_path), read_image(right_path)
+    if left.shape != right.shape:
+        raise ImageError(f"{left_path} ({left.shape[1]}x{left.shape[0]}) and {right_path} "
+                         f"({right.shape[1]}x{right.shape[0]}) differ in size")
+    return left, right
+
+
 def write_atomic(path: str | Path, encode) -> None:
     """Write bytes made by ``encode(tmp_path)`` to ``path`` through a temporary file.
 

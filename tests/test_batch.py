@@ -1,0 +1,113 @@
+import os
+import subprocess
+import sys
+
+import cv2
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from vsmatch import batch, io
+from vsmatch.cli import main
+
+from conftest import random_pair
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def write_pair(folder, rng, left_name, right_name, shift=3, size=(32, 48)):
+    folder.mkdir(parents=True, exist_ok=True)
+    left, right = random_pair(rng, height=size[0], width=size[1], shift=shift)
+    cv2.imwrite(str(folder / left_name), left)
+    cv2.imwrite(str(folder / right_name), right)
+
+
+@pytest.fixture
+def pair_list(tmp_path, rng):
+    write_pair(tmp_path / "a", rng, "l.png", "r.png", shift=2)
+    write_pair(tmp_path / "b", rng, "l.png", "r.png", shift=4)
+    (tmp_path / "out").mkdir()
+    csv = tmp_path / "pairs.csv"
+    csv.write_text("left,right,output,max_disp\n"
+                   "a/l.png,a/r.png,out/a.pfm,8\n"
+                   "missing/l.png,missing/r.png,out/m.pfm,8\n"
+                   "b/l.png,b/r.png,out/b.png,8\n")
+    return csv
+
+
+def test_csv_batch_carries_on_past_a_failure(pair_list, tmp_path):
+    result = invoke("batch", pair_list)
+    assert result.exit_code == 1
+    assert "matched 2 of 3 pairs, 1 failed" in result.output
+    assert "failed: " in result.output and "missing/l.png: file not found" in result.output
+    assert np.all(np.abs(io.read_disparity(tmp_path / "out/a.pfm")[5:-5, 12:-5] - 2) < 0.5)
+    assert np.all(np.abs(io.read_disparity(tmp_path / "out/b.png")[5:-5, 12:-5] - 4) < 0.5)
+    assert not (tmp_path / "out/m.pfm").exists()
+
+
+def test_existing_outputs_are_skipped_unless_overwrite(pair_list, tmp_path):
+    invoke("batch", pair_list)
+    stamp = (tmp_path / "out/a.pfm").stat().st_mtime_ns
+    again = invoke("batch", pair_list)
+    assert "skipped 2 with existing output" in again.output
+    assert (tmp_path / "out/a.pfm").stat().st_mtime_ns == stamp
+    forced = invoke("batch", pair_list, "--overwrite")
+    assert "matched 2 of 3" in forced.output and "skipped" not in forced.output
+
+
+def test_folder_batch_finds_scene_folders_and_side_by_side_files(tmp_path, rng):
+    src = tmp_path / "scenes"
+    write_pair(src / "alpha", rng, "imL.png", "imR.png")
+    write_pair(src / "beta", rng, "im0.png", "im1.png")
+    write_pair(src, rng, "gamma_left.png", "gamma_right.png")
+    (src / "notes.txt").write_text("ignored")
+    result = invoke("batch", src, "-o", tmp_path / "disp", "--format", "png",
+                    "--max-disp", 8, "--config", "paper")
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in (tmp_path / "disp").iterdir()) == [
+        "alpha.png", "beta.png", "gamma.png"]
+
+
+def test_parallel_jobs_give_the_same_bytes(pair_list, tmp_path):
+    invoke("batch", pair_list)
+    serial = (tmp_path / "out/a.pfm").read_bytes()
+    result = invoke("batch", pair_list, "--jobs", 2, "--overwrite")
+    assert result.exit_code == 1 and "matched 2 of 3" in result.output
+    assert (tmp_path / "out/a.pfm").read_bytes() == serial
+
+
+@pytest.mark.parametrize("text,message", [
+    ("a.png,b.png\n", "line 1: expected left,right,output"),
+    ("a.png,b.png,c.pfm,many\n", "max_disp 'many' is not a whole number"),
+])
+def test_bad_pair_lists_are_refused(tmp_path, text, message):
+    csv = tmp_path / "bad.csv"
+    csv.write_text(text)
+    with pytest.raises(batch.BatchError, match=message):
+        batch.read_pair_list(csv, 64)
+    result = invoke("batch", csv)
+    assert result.exit_code == 1 and message in result.output
+
+
+def test_empty_and_missing_sources(tmp_path):
+    (tmp_path / "empty").mkdir()
+    assert "no stereo pairs found" in invoke("batch", tmp_path / "empty",
+                                             "-o", tmp_path / "o").output
+    assert "no such file or folder" in invoke("batch", tmp_path / "nope").output
+
+
+@pytest.mark.data
+def test_same_bytes_with_one_and_two_threads(data_dir, tmp_path):
+    scene = data_dir / "middlebury2" / "cones"
+    outputs = []
+    for threads in ("1", "2"):
+        out = tmp_path / f"t{threads}.pfm"
+        env = {**os.environ, "NUMBA_NUM_THREADS": threads}
+        proc = subprocess.run([sys.executable, "-m", "vsmatch", "--quiet", "run",
+                               scene / "imL.png", scene / "imR.png", "-o", out,
+                               "--max-disp", "59"], env=env, capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr
+        outputs.append(out.read_bytes())
+    assert outputs[0] == outputs[1]

@@ -1,0 +1,160 @@
+"""Matching many pairs: a CSV list or a folder of pairs, failures collected, not fatal."""
+
+from __future__ import annotations
+
+import csv
+import multiprocessing
+import os
+from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import io, pipeline
+from .config import Config
+
+IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
+
+#: File names of a pair inside a scene folder, tried in order (Middlebury v2, 2014, 2005/6).
+PAIR_NAMES = (("imL", "imR"), ("im0", "im1"), ("view1", "view5"), ("left", "right"))
+
+#: Suffixes of a pair of files side by side in one folder: NAME_left.png, NAME_right.png.
+PAIR_SUFFIXES = (("_left", "_right"), ("_L", "_R"))
+
+
+class BatchError(ValueError):
+    """A batch source that cannot be read; the message is one line."""
+
+
+@dataclass(frozen=True)
+class PairJob:
+    left: Path
+    right: Path
+    output: Path
+    max_disp: int
+
+
+def read_pair_list(csv_path: str | Path, default_max_disp: int) -> list[PairJob]:
+    """Rows ``left,right,output[,max_disp]``; relative paths are relative to the CSV's
+    folder. A first row starting with ``left`` is a header; blank rows are skipped."""
+    csv_path = Path(csv_path)
+    base = csv_path.parent
+    jobs = []
+    try:
+        with csv_path.open(newline="", encoding="utf-8") as fh:
+            rows = list(csv.reader(fh))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise BatchError(f"{csv_path}: cannot read the pair list ({exc})") from None
+    for number, row in enumerate(rows, start=1):
+        row = [cell.strip() for cell in row]
+        if not any(row) or (number == 1 and row[0].lower() == "left"):
+            continue
+        if len(row) not in (3, 4) or not all(row[:3]):
+            raise BatchError(f"{csv_path}, line {number}: expected left,right,output[,max_disp]")
+        max_disp = default_max_disp
+        if len(row) == 4 and row[3]:
+            try:
+                max_disp = int(row[3])
+            except ValueError:
+                raise BatchError(f"{csv_path}, line {number}: max_disp '{row[3]}' is not a "
+                                 "whole number") from None
+        left, right, output = (base / cell for cell in row[:3])
+        jobs.append(PairJob(left, right, output, max_disp))
+    return jobs
+
+
+def _image_with_stem(folder: Path, stem: str) -> Path | None:
+    for ext in IMAGE_EXTENSIONS:
+        for candidate in (folder / f"{stem}{ext}", folder / f"{stem}{ext.upper()}"):
+            if candidate.is_file():
+                return candidate
+    return None
+
+
+def find_pairs(folder: str | Path, out_dir: str | Path, *, max_disp: int,
+               suffix: str = ".pfm") -> list[PairJob]:
+    """The pairs in ``folder``: each sub-folder holding a pair named as in
+    :data:`PAIR_NAMES`, and files named ``NAME_left`` / ``NAME_right`` (or ``_L`` / ``_R``).
+    Each pair's output is ``out_dir/NAME`` + ``suffix``."""
+    folder, out_dir = Path(folder), Path(out_dir)
+    jobs = []
+    for sub in sorted(p for p in folder.iterdir() if p.is_dir()):
+        for left_stem, right_stem in PAIR_NAMES:
+            left, right = _image_with_stem(sub, left_stem), _image_with_stem(sub, right_stem)
+            if left and right:
+                jobs.append(PairJob(left, right, out_dir / f"{sub.name}{suffix}", max_disp))
+                break
+    for path in sorted(folder.iterdir()):
+        if path.suffix.lower() not in IMAGE_EXTENSIONS:
+            continue
+        for left_tag, right_tag in PAIR_SUFFIXES:
+            if path.stem.endswith(left_tag):
+                name = path.stem[: -len(left_tag)]
+                right = _image_with_stem(folder, name + right_tag)
+                if right:
+                    jobs.append(PairJob(path, right, out_dir / f"{name}{suffix}", max_disp))
+    return jobs
+
+
+def match_pair(job: PairJob, config: Config) -> None:
+    """Read, match and write one pair; raises with a one-line message on failure."""
+    left, right = io.read_pair(job.left, job.right)
+    try:
+        pipeline.check_pair(left, right, job.max_disp, config)
+    except ValueError as exc:
+        raise ValueError(f"{job.left}: {exc}") from None
+    disp = pipeline.match(left, right, max_disp=job.max_disp, config=config)
+    io.write_disparity(job.output, disp)
+
+
+def _match_pair_quietly(job: PairJob, config: Config) -> str | None:
+    """:func:`match_pair` in a worker: the error message, or None."""
+    try:
+        match_pair(job, config)
+    except (ValueError, OSError) as exc:
+        return " ".join(str(exc).split())
+    return None
+
+
+def _init_worker(threads: int) -> None:
+    import numba
+
+    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+
+
+def run_batch(jobs: list[PairJob], config: Config, *, workers: int = 1,
+              on_done: Callable[[PairJob, str | None], None] | None = None
+              ) -> list[tuple[PairJob, str]]:
+    """Match every job; returns the failures as ``(job, message)``, in job order.
+
+    With ``workers`` > 1 the pairs run in that many processes, each with its share of
+    the cores for Numba's threads. ``on_done(job, error)`` follows each pair.
+    """
+    failures = {}
+    for job, error in _results(jobs, config, workers):
+        if error is not None:
+            failures[job] = error
+        if on_done is not None:
+            on_done(job, error)
+    return [(job, failures[job]) for job in jobs if job in failures]
+
+
+def _results(jobs, config, workers) -> Iterator[tuple[PairJob, str | None]]:
+    if workers <= 1:
+        for job in jobs:
+            yield job, _match_pair_quietly(job, config)
+        return
+    threads = max(1, (os.cpu_count() or 1) // workers)
+    # Fresh interpreters, not forks: forking a process whose Numba thread pool is running
+    # can kill the child.
+    with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker,
+                             initargs=(threads,),
+                             mp_context=multiprocessing.get_context("spawn")) as pool:
+        futures = {pool.submit(_match_pair_quietly, job, config): job for job in jobs}
+        try:
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+        except BaseException:
+            for future in futures:
+                future.cancel()
+            raise
