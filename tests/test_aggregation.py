@@ -7,6 +7,11 @@ from vsmatch.config import ArmsConfig
 import reference
 
 
+def planes(arms):
+    """The library's arm layout, (4, H, W) uint8, from the references' (H, W, 4)."""
+    return np.ascontiguousarray(np.moveaxis(arms, -1, 0)).astype(np.uint8)
+
+
 @pytest.mark.parametrize("kappa", [0.0, 1.5, -0.5])
 def test_cross_arms_match_reference(rng, kappa):
     image = rng.integers(0, 60, size=(12, 15, 3), dtype=np.uint8)
@@ -15,15 +20,16 @@ def test_cross_arms_match_reference(rng, kappa):
     cfg = ArmsConfig(tau1=30, tau2=25, tau3=12, l1=3, l2=6, kappa=kappa, g_sat=150)
     got = aggregation.cross_arms(image, theta, grad, cfg)
     want = reference.cross_arms(image, theta, grad, 30, 25, 12, 3, 6, kappa, 150)
-    np.testing.assert_array_equal(got, want)
+    np.testing.assert_array_equal(got, planes(want))
 
 
 def test_arms_of_a_flat_image_reach_l2_or_the_border():
     image = np.full((9, 40, 3), 100, np.uint8)
     zeros = np.zeros((9, 40), np.float32)
     arms = aggregation.cross_arms(image, zeros, zeros, ArmsConfig(l1=5, l2=10))
-    assert arms[4, 20].tolist() == [10, 10, 4, 4]
-    assert arms[0, 0].tolist() == [0, 10, 0, 8]
+    assert arms.shape == (4, 9, 40) and arms.dtype == np.uint8
+    assert arms[:, 4, 20].tolist() == [10, 10, 4, 4]
+    assert arms[:, 0, 0].tolist() == [0, 10, 0, 8]
 
 
 @pytest.mark.parametrize("iterations", [1, 2, 3])
@@ -40,7 +46,8 @@ def test_aggregation_matches_explicit_region_average(rng, iterations):
         arms[..., 2] = np.minimum(arms[..., 2], ys[:, None])
         arms[..., 3] = np.minimum(arms[..., 3], (h - 1 - ys)[:, None])
     want = reference.aggregate(volume, arms_l, arms_r, iterations)
-    got = aggregation.aggregate_cross(volume.copy(), arms_l, arms_r, iterations=iterations)
+    got = aggregation.aggregate_cross(volume.copy(), planes(arms_l), planes(arms_r),
+                                      iterations=iterations)
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
 
 
@@ -51,5 +58,5 @@ def test_aggregation_keeps_a_constant_volume():
     arms[:, -1, 1] = 0
     arms[0, :, 2] = 0
     arms[-1, :, 3] = 0
-    got = aggregation.aggregate_cross(volume, arms, arms, iterations=4)
+    got = aggregation.aggregate_cross(volume, planes(arms), planes(arms), iterations=4)
     np.testing.assert_allclose(got, 0.25, rtol=1e-6)

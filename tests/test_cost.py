@@ -43,8 +43,14 @@ def test_cost_volume_matches_reference(rng, lam_g, lam_ad):
     cfg = CostConfig(lambda_census=15.0, lambda_gradient=lam_g, lambda_ad=lam_ad)
     got = cost.cost_volume(left, right, cl, cr, gl, gr, n_disp=5, cfg=cfg)
     assert got.shape == (9, 12, 5) and got.dtype == np.float32
-    want = reference.cost_volume(cl, cr, gl, gr, left, right, 5, 15.0, lam_g, lam_ad)
+    # The gradient term is looked up on gradients quantised to 1/GRADIENT_STEPS.
+    q = cost.GRADIENT_STEPS
+    gl_q, gr_q = np.round(gl * q) / q, np.round(gr * q) / q
+    want = reference.cost_volume(cl, cr, gl_q, gr_q, left, right, 5, 15.0, lam_g, lam_ad)
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
+    exact = reference.cost_volume(cl, cr, gl, gr, left, right, 5, 15.0, lam_g, lam_ad)
+    if lam_g is not None:  # quantisation moves a gradient difference by at most 1/q
+        assert np.abs(got - exact).max() <= (1.0 / q) / lam_g + 1e-6
     assert np.all(got[:, 0, 1:] == cost.max_cost(cfg))  # no right pixel: maximum cost
 
 

@@ -39,7 +39,8 @@ def test_region_vote_matches_reference(rng):
     arms[..., 2] = np.minimum(3, ys)[:, None]
     arms[..., 3] = np.minimum(3, h - 1 - ys)[:, None]
     cfg = VotingConfig(enabled=True, iterations=2, min_votes=8, min_share=0.4)
-    got_d, got_l = refinement.region_vote(disp, labels, arms, n_disp=n, cfg=cfg)
+    planes = np.ascontiguousarray(np.moveaxis(arms, -1, 0)).astype(np.uint8)
+    got_d, got_l = refinement.region_vote(disp, labels, planes, n_disp=n, cfg=cfg)
     want_d, want_l = disp, labels
     for _ in range(2):
         want_d, want_l = reference.region_vote_once(want_d, want_l, arms, n, 8, 0.4)

@@ -12,14 +12,14 @@ from .images import as_channels
 
 def cross_arms(image: np.ndarray, theta: np.ndarray, sensitivity: np.ndarray,
                cfg: ArmsConfig) -> np.ndarray:
-    """Arm lengths ``(H, W, 4)`` int32 in the order left, right, up, down.
+    """Arm lengths ``(4, H, W)`` uint8 in the order left, right, up, down.
 
     ``image`` is the colour (or grey) image the colour distances are measured on;
     ``theta`` and ``sensitivity`` are the direction and magnitude of its gradient.
     """
     image = as_channels(image)
     strength = np.minimum(1.0, sensitivity / cfg.g_sat).astype(np.float32)
-    out = np.empty(theta.shape + (4,), dtype=np.int32)
+    out = np.empty((4,) + theta.shape, dtype=np.uint8)  # l2 <= 255 (config range)
     _cross_arms_kernel(image, np.ascontiguousarray(theta, dtype=np.float32), strength,
                        float(cfg.tau1), float(cfg.tau2), float(cfg.tau3),
                        int(cfg.l1), int(cfg.l2), float(cfg.kappa), out)

@@ -41,6 +41,11 @@ def max_cost(cfg: CostConfig) -> float:
     return 1.0 + (cfg.lambda_gradient is not None) + (cfg.lambda_ad is not None)
 
 
+#: Gradient magnitudes are quantised to this many steps per grey level for the table
+#: lookup of their cost term (an error of at most 1/8, negligible against lambda).
+GRADIENT_STEPS = 4
+
+
 def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
                 census_l: np.ndarray, census_r: np.ndarray,
                 grad_l: np.ndarray, grad_r: np.ndarray,
@@ -48,15 +53,23 @@ def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
     """The matching cost volume ``(H, W, n_disp)`` float32 (ALGORITHM.md §2)."""
     height, width = census_l.shape
     n_bits = cfg.census_width * cfg.census_height - 1
-    table = rho(np.arange(n_bits + 1), cfg.lambda_census).astype(np.float32)
-    inv_grad = -1.0 if cfg.lambda_gradient is None else 1.0 / cfg.lambda_gradient
-    inv_ad = -1.0 if cfg.lambda_ad is None else 1.0 / cfg.lambda_ad
-    colour_l = as_channels(colour_l)
-    colour_r = as_channels(colour_r)
+    census_table = rho(np.arange(n_bits + 1), cfg.lambda_census).astype(np.float32)
+    colour_l = as_channels(colour_l).astype(np.int16)
+    colour_r = as_channels(colour_r).astype(np.int16)
+    q_l = np.round(np.asarray(grad_l, np.float32) * GRADIENT_STEPS).astype(np.int32)
+    q_r = np.round(np.asarray(grad_r, np.float32) * GRADIENT_STEPS).astype(np.int32)
+    if cfg.lambda_gradient is None:
+        grad_table = np.empty(0, np.float32)
+    else:
+        steps = np.arange(max(q_l.max(), q_r.max()) + 1) / GRADIENT_STEPS
+        grad_table = rho(steps, cfg.lambda_gradient).astype(np.float32)
+    if cfg.lambda_ad is None:
+        ad_table = np.empty(0, np.float32)
+    else:
+        channels = colour_l.shape[2]
+        ad_table = rho(np.arange(255 * channels + 1) / channels, cfg.lambda_ad).astype(
+            np.float32)
     out = np.empty((height, width, n_disp), dtype=np.float32)
-    matching_cost_volume(census_l, census_r,
-                         np.ascontiguousarray(grad_l, dtype=np.float32),
-                         np.ascontiguousarray(grad_r, dtype=np.float32),
-                         colour_l, colour_r, table, inv_grad, inv_ad,
-                         np.float32(max_cost(cfg)), out)
+    matching_cost_volume(census_l, census_r, q_l, q_r, colour_l, colour_r, census_table,
+                         grad_table, ad_table, np.float32(max_cost(cfg)), out)
     return out

@@ -9,13 +9,33 @@ from .config import ScanlineConfig
 from .images import as_channels
 
 
+def colour_change(image: np.ndarray, tau: float, *, along_rows: bool) -> np.ndarray:
+    """uint8 (H, W): 1 where the largest channel difference from the previous pixel
+    along the axis is ``tau`` or more, and in the first column (row), which has none."""
+    image = as_channels(image).astype(np.int16)
+    out = np.ones(image.shape[:2], dtype=np.uint8)
+    if along_rows:
+        out[:, 1:] = np.abs(image[:, 1:] - image[:, :-1]).max(axis=2) >= tau
+    else:
+        out[1:, :] = np.abs(image[1:] - image[:-1]).max(axis=2) >= tau
+    return out
+
+
 def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
                       cfg: ScanlineConfig) -> np.ndarray:
-    """The mean of the four directional path costs (left, right, up, down), (H, W, D)."""
+    """The mean of the four directional path costs (left, right, up, down), (H, W, D).
+
+    P1 and P2 are divided by ``reduce_one`` where the colour changes by ``tau`` or more
+    between a pixel and the previous one on the path in one image (left pixel, or its
+    match at d in the right image), by ``reduce_both`` where it does in both.
+    """
     out = np.zeros_like(volume)
-    image_l, image_r = as_channels(left), as_channels(right)
-    args = (np.float32(cfg.p1), np.float32(cfg.p2), float(cfg.tau),
-            np.float32(cfg.reduce_one), np.float32(cfg.reduce_both))
+    divisors = np.array([1.0, cfg.reduce_one, cfg.reduce_both])
+    p1s = (cfg.p1 / divisors).astype(np.float32)
+    p2s = (cfg.p2 / divisors).astype(np.float32)
     for along_rows in (1, 0):
-        scanline_pass(volume, image_l, image_r, *args, along_rows, np.float32(0.25), out)
+        change_l = colour_change(left, cfg.tau, along_rows=bool(along_rows))
+        change_r = colour_change(right, cfg.tau, along_rows=bool(along_rows))
+        scanline_pass(volume, change_l, change_r, p1s, p2s, along_rows,
+                      np.float32(0.25), out)
     return out

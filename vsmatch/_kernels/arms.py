@@ -3,7 +3,7 @@ from numba import njit, prange
 
 from . import KERNEL_OPTIONS
 
-# Arm order in the last axis of an arms array.
+# Arm order in the first axis of an arms array, (4, H, W).
 LEFT, RIGHT, UP, DOWN = 0, 1, 2, 3
 
 
@@ -51,10 +51,10 @@ def cross_arms(image, theta, strength, tau1, tau2, tau3, l1, l2, kappa, out):
             fh = max(0.0, 1.0 + kappa * abs(np.cos(theta[y, x])) * s)
             fv = max(0.0, 1.0 + kappa * abs(np.sin(theta[y, x])) * s)
             th1, th3 = tau1 * fh, tau3 * fh
-            out[y, x, LEFT] = _grow_arm(image, y, x, 0, -1, min(l2, x), th1, tau2, th3, l1)
-            out[y, x, RIGHT] = _grow_arm(image, y, x, 0, 1, min(l2, width - 1 - x),
+            out[LEFT, y, x] = _grow_arm(image, y, x, 0, -1, min(l2, x), th1, tau2, th3, l1)
+            out[RIGHT, y, x] = _grow_arm(image, y, x, 0, 1, min(l2, width - 1 - x),
                                          th1, tau2, th3, l1)
             tv1, tv3 = tau1 * fv, tau3 * fv
-            out[y, x, UP] = _grow_arm(image, y, x, -1, 0, min(l2, y), tv1, tau2, tv3, l1)
-            out[y, x, DOWN] = _grow_arm(image, y, x, 1, 0, min(l2, height - 1 - y),
+            out[UP, y, x] = _grow_arm(image, y, x, -1, 0, min(l2, y), tv1, tau2, tv3, l1)
+            out[DOWN, y, x] = _grow_arm(image, y, x, 1, 0, min(l2, height - 1 - y),
                                         tv1, tau2, tv3, l1)

@@ -25,8 +25,9 @@ def region_vote(disp, labels, arms, n_disp, min_votes, min_share, out_disp, out_
                 continue
             hist[:] = 0
             total = 0
-            for yy in range(y - arms[y, x, UP], y + arms[y, x, DOWN] + 1):
-                for xx in range(x - arms[yy, x, LEFT], x + arms[yy, x, RIGHT] + 1):
+            for yy in range(y - np.int64(arms[UP, y, x]), y + np.int64(arms[DOWN, y, x]) + 1):
+                for xx in range(x - np.int64(arms[LEFT, yy, x]),
+                                x + np.int64(arms[RIGHT, yy, x]) + 1):
                     if labels[yy, xx] == VALID:
                         hist[disp[yy, xx]] += 1
                         total += 1
