@@ -35,11 +35,11 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
     (x - d)'s. ``volume`` is used as a work buffer and overwritten.
     """
     current = np.ascontiguousarray(volume, dtype=np.float32)
+    # One scratch volume: the first pass of each iteration writes it, the second writes
+    # the result back over ``current``, so aggregation holds two volumes at most.
     scratch = np.empty_like(current)
-    result = np.empty_like(current)
     for it in range(iterations):
         rows_first = it % 2 == 0
         sum_along_arms(current, arms_l, arms_r, rows_first, False, scratch)
-        sum_along_arms(scratch, arms_l, arms_r, not rows_first, True, result)
-        current, result = result, current
+        sum_along_arms(scratch, arms_l, arms_r, not rows_first, True, current)
     return current

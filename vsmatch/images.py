@@ -18,3 +18,16 @@ def as_channels(image: np.ndarray) -> np.ndarray:
     if image.ndim == 2:
         image = image[:, :, None]
     return np.ascontiguousarray(image, dtype=np.uint8)
+
+
+def colour_change(image: np.ndarray, threshold: float, *, along_rows: bool) -> np.ndarray:
+    """uint8 (H, W): 1 where the largest channel difference from the previous pixel
+    along the axis ((y, x - 1) on rows, (y - 1, x) on columns) is ``threshold`` or more,
+    and in the first column (row), which has no previous pixel."""
+    image = as_channels(image).astype(np.int16)
+    out = np.ones(image.shape[:2], dtype=np.uint8)
+    if along_rows:
+        out[:, 1:] = np.abs(image[:, 1:] - image[:, :-1]).max(axis=2) >= threshold
+    else:
+        out[1:, :] = np.abs(image[1:] - image[:-1]).max(axis=2) >= threshold
+    return out

@@ -6,19 +6,7 @@ import numpy as np
 
 from ._kernels.scanline import scanline_pass
 from .config import ScanlineConfig
-from .images import as_channels
-
-
-def colour_change(image: np.ndarray, tau: float, *, along_rows: bool) -> np.ndarray:
-    """uint8 (H, W): 1 where the largest channel difference from the previous pixel
-    along the axis is ``tau`` or more, and in the first column (row), which has none."""
-    image = as_channels(image).astype(np.int16)
-    out = np.ones(image.shape[:2], dtype=np.uint8)
-    if along_rows:
-        out[:, 1:] = np.abs(image[:, 1:] - image[:, :-1]).max(axis=2) >= tau
-    else:
-        out[1:, :] = np.abs(image[1:] - image[:-1]).max(axis=2) >= tau
-    return out
+from .images import colour_change
 
 
 def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
