@@ -168,3 +168,36 @@ def region_vote_once(disp, labels, arms, n, min_votes, min_share):
             if counts.max() > min_share * len(votes):
                 out_d[y, x], out_l[y, x] = counts.argmax(), 0
     return out_d, out_l
+
+
+def discontinuity(disp, volume, jump):
+    h, w = disp.shape
+    out = disp.copy()
+    for y in range(h):
+        for x in range(w):
+            d = disp[y, x]
+            if not np.isfinite(d):
+                continue
+            best = volume[y, x, int(d)]
+            for nx in (x - 1, x + 1):
+                if 0 <= nx < w and np.isfinite(disp[y, nx]) and abs(disp[y, nx] - d) > jump:
+                    if volume[y, x, int(disp[y, nx])] < best:
+                        best = volume[y, x, int(disp[y, nx])]
+                        out[y, x] = disp[y, nx]
+    return out
+
+
+def subpixel(disp, volume):
+    h, w, n = volume.shape
+    out = disp.astype(np.float64).copy()
+    for y in range(h):
+        for x in range(w):
+            d = disp[y, x]
+            if not np.isfinite(d) or not 0 < int(d) < n - 1:
+                continue
+            k = int(d)
+            c0, c1, c2 = (float(v) for v in volume[y, x, k - 1:k + 2])
+            denom = c0 + c2 - 2 * c1
+            if denom > 1e-9:
+                out[y, x] = k + np.clip((c0 - c2) / (2 * denom), -0.5, 0.5)
+    return out

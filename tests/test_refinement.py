@@ -78,3 +78,20 @@ def test_median3_keeps_invalid_pixels_apart():
     disp[0, 0] = np.inf
     out = refinement.median3(disp)
     assert out[2, 2] == 4.0 and np.isinf(out[0, 0]) and np.isfinite(out[1:, 1:]).all()
+
+
+def test_discontinuity_adjust_matches_reference(rng):
+    disp = rng.integers(0, 6, size=(9, 12)).astype(np.float32)
+    disp[2, 3] = np.inf
+    volume = rng.random((9, 12, 6), dtype=np.float32)
+    for jump in (0.0, 1.0, 2.5):
+        got = refinement.discontinuity_adjust(disp, volume, DiscontinuityConfig(jump=jump))
+        np.testing.assert_array_equal(got, reference.discontinuity(disp, volume, jump))
+
+
+def test_subpixel_matches_reference(rng):
+    disp = rng.integers(0, 7, size=(9, 12)).astype(np.float32)
+    disp[4, 4] = np.inf
+    volume = rng.random((9, 12, 7), dtype=np.float32)
+    np.testing.assert_allclose(refinement.subpixel(disp, volume),
+                               reference.subpixel(disp, volume), rtol=1e-5, atol=1e-6)
