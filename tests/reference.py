@@ -201,3 +201,27 @@ def subpixel(disp, volume):
             if denom > 1e-9:
                 out[y, x] = k + np.clip((c0 - c2) / (2 * denom), -0.5, 0.5)
     return out
+
+
+def fill(disp, labels, image, steps_y, steps_x, max_search):
+    h, w = disp.shape
+    img = image.astype(float).reshape(h, w, -1)
+    out = disp.astype(np.float32).copy()
+    for y in range(h):
+        for x in range(w):
+            if labels[y, x] == 0:
+                continue
+            best, best_score = np.inf, np.inf
+            for sy, sx in zip(steps_y, steps_x):
+                for step in range(1, max_search + 1):
+                    yy, xx = int(np.round(y + step * sy)), int(np.round(x + step * sx))
+                    if not (0 <= yy < h and 0 <= xx < w):
+                        break
+                    if labels[yy, xx] == 0:
+                        score = (disp[yy, xx] if labels[y, x] == 1
+                                 else np.abs(img[y, x] - img[yy, xx]).max())
+                        if score < best_score:
+                            best, best_score = disp[yy, xx], score
+                        break
+            out[y, x] = best
+    return out

@@ -63,3 +63,14 @@ def test_search_directions_are_distinct_unit_steps(count):
     dy, dx = disparity.search_directions(count)
     assert len(set(zip(np.round(dy, 6), np.round(dx, 6)))) == count
     np.testing.assert_allclose(np.maximum(np.abs(dy), np.abs(dx)), 1.0)
+
+
+@pytest.mark.parametrize("directions", [2, 8, 16])
+def test_fill_matches_reference(rng, directions):
+    disp = rng.integers(0, 9, size=(10, 13)).astype(np.float32)
+    labels = rng.choice([0, 0, 0, 1, 2], size=(10, 13)).astype(np.uint8)
+    image = rng.integers(0, 256, size=(10, 13, 3), dtype=np.uint8)
+    cfg = FillConfig(directions=directions, max_search=6)
+    steps_y, steps_x = disparity.search_directions(directions)
+    np.testing.assert_array_equal(disparity.fill_rejected(disp, labels, image, cfg),
+                                  reference.fill(disp, labels, image, steps_y, steps_x, 6))
