@@ -108,13 +108,14 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
                                   cost.census_transform(grey_r, **census_kw),
                                   grad_l, grad_r, n_disp=n_disp, cfg=cfg.cost)
 
-    arms_l = None
+    arms_l = arms_r = None
     if cfg.aggregation.iterations > 0 or cfg.voting.enabled:
         with stage("arms"):
             arms_l = aggregation.cross_arms(left, theta_l, grad_l, cfg.arms)
+            if cfg.aggregation.iterations > 0:
+                arms_r = aggregation.cross_arms(right, theta_r, grad_r, cfg.arms)
     if cfg.aggregation.iterations > 0:
         with stage("aggregation"):
-            arms_r = aggregation.cross_arms(right, theta_r, grad_r, cfg.arms)
             volume = aggregation.aggregate_cross(volume, arms_l, arms_r,
                                                  iterations=cfg.aggregation.iterations)
 
