@@ -37,6 +37,7 @@ def test_child_reports_time_and_memory(tmp_path):
     report = json.loads(proc.stdout.splitlines()[-1])
     assert report["size"] == [192, 128] and report["levels"] == 41
     assert report["peak_mb"] >= report["before_match_mb"] > 0
+    assert report["first_call_seconds"] > 0 and report["match_seconds"] > 0
     assert report["cost_volume_mb"] == 192 * 128 * 41 * 4 / 2 ** 20
     text = bench._memory_line("x", report)
     assert "x the cost volume" in text
