@@ -130,9 +130,7 @@ def _check_output_path(path: Path) -> None:
     if suffix not in io.DISPARITY_FORMATS:
         raise click.BadParameter(f"'{path}' must end in .pfm (float32) or .png (16-bit)",
                                  param_hint="'-o'")
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise click.ClickException(f"{path}: output folder '{folder}' does not exist")
+    folder = _check_output_folder(path)
     if not _writable(folder):
         raise click.ClickException(f"{path}: output folder '{folder}' is not writable")
 
@@ -234,7 +232,7 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, threshold
         # Loading each config first fails before any work on a bad one.
         configs = {m: load_config(m) for m in (methods or ("census", "paper", "default"))}
     if json_path is not None:
-        _check_output_path_any(Path(json_path))
+        _check_output_folder(Path(json_path))
     levels = _parse_levels(noise)
     scenes = datasets.load_dataset(dataset, data_root)
     quiet = ctx.find_root().obj.get("quiet")
@@ -253,8 +251,7 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, threshold
     if levels:
         _echo(ctx, evaluation.format_noise_table(report))
     if json_path is not None:
-        io.write_atomic(json_path, lambda tmp: Path(tmp).write_text(
-            json.dumps(report, indent=2) + "\n", encoding="utf-8"))
+        io.write_text_atomic(json_path, json.dumps(report, indent=2) + "\n")
         _echo(ctx, f"wrote {json_path}")
 
 
@@ -272,10 +269,12 @@ def _parse_levels(text: str | None) -> list[float]:
     return levels
 
 
-def _check_output_path_any(path: Path) -> None:
+def _check_output_folder(path: Path) -> Path:
+    """The folder ``path`` goes in, which must exist."""
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise click.ClickException(f"{path}: output folder '{folder}' does not exist")
+    return folder
 
 
 @main.command("bench")
@@ -284,7 +283,7 @@ def _check_output_path_any(path: Path) -> None:
 @click.option("--repeats", type=click.IntRange(min=1), default=5, show_default=True,
               help="Timed runs per pair; the median is reported.")
 @click.option("--no-cold", is_flag=True, help="Skip the empty-cache start-up run "
-              "(it compiles every kernel, about a minute).")
+              "(it compiles every kernel, about 15 s).")
 @click.option("--no-scaling", is_flag=True, help="Skip the 3x upsampled cones run.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help="Write the measurements as JSON here.")
@@ -301,14 +300,13 @@ def bench_command(ctx, data_root, config, repeats, no_cold, no_scaling, json_pat
     from . import bench
 
     if json_path is not None:
-        _check_output_path_any(Path(json_path))
+        _check_output_folder(Path(json_path))
     load_config(config)
     report = bench.run_benchmark(data_root, config, repeats, cold=not no_cold,
                                  scaling=not no_scaling)
     _echo(ctx, bench.format_report(report))
     if json_path is not None:
-        io.write_atomic(json_path, lambda tmp: Path(tmp).write_text(
-            json.dumps(report, indent=2) + "\n", encoding="utf-8"))
+        io.write_text_atomic(json_path, json.dumps(report, indent=2) + "\n")
         _echo(ctx, f"wrote {json_path}")
 
 

@@ -289,11 +289,3 @@ def _read_config_text(name_or_path: str) -> tuple[str, str]:
         return path.read_text(encoding="utf-8"), str(path)
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"cannot read config {path}: {exc}") from None
-
-
-def config_name(name_or_path: str | Path | None) -> str:
-    """A short name for a config: the bundled name, or the file's stem."""
-    if name_or_path is None:
-        return DEFAULT_CONFIG_NAME
-    text = str(name_or_path)
-    return text if text in bundled_config_names() else Path(text).stem

@@ -14,7 +14,8 @@ import yaml
 
 from .config import Config, config_from_dict, load_config
 from .datasets import Scene
-from .io import colour_disparity, error_image, imwrite_atomic, write_atomic, write_disparity
+from .io import (colour_disparity, error_image, imwrite_atomic, write_disparity,
+                 write_text_atomic)
 from .pipeline import match
 
 MASKS = ("nonocc", "all", "disc")
@@ -59,20 +60,21 @@ def evaluate(scenes: list[Scene], methods: dict, *, dataset: str, threshold: flo
     report: dict[str, Any] = {"dataset": dataset, "threshold": threshold, "methods": {}}
     for name, config in methods.items():
         cfg = load_config(config)
+        folder = None if out_dir is None else Path(out_dir) / _safe_name(name)
         per_scene = {}
         for scene in scenes:
             start = time.perf_counter()
             disp = match(scene.left, scene.right, max_disp=scene.max_disp, config=cfg)
             seconds = time.perf_counter() - start
             per_scene[scene.name] = {**score_scene(disp, scene, threshold), "seconds": seconds}
-            if out_dir is not None:
-                save_scene_outputs(Path(out_dir) / _safe_name(name), scene, disp, threshold)
+            if folder is not None:
+                save_scene_outputs(folder, scene, disp, threshold)
             if on_done is not None:
                 on_done(name, scene.name)
-        if out_dir is not None:
-            folder = Path(out_dir) / _safe_name(name)
-            write_atomic(folder / "config.yaml", lambda tmp, c=cfg: Path(tmp).write_text(
-                yaml.safe_dump(c.to_dict(), sort_keys=False), encoding="utf-8"))
+        if folder is not None:
+            folder.mkdir(parents=True, exist_ok=True)
+            write_text_atomic(folder / "config.yaml",
+                              yaml.safe_dump(cfg.to_dict(), sort_keys=False))
         report["methods"][name] = {"scenes": per_scene, "avg": average(per_scene)}
     return report
 

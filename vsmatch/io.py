@@ -84,6 +84,11 @@ def write_atomic(path: str | Path, encode) -> None:
         raise
 
 
+def write_text_atomic(path: str | Path, text: str) -> None:
+    """Write UTF-8 text to ``path`` through a temporary file (see :func:`write_atomic`)."""
+    write_atomic(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
+
+
 def imwrite_atomic(path: str | Path, image: np.ndarray) -> None:
     """``cv2.imwrite`` through a temporary file; raises OSError when OpenCV cannot write."""
     def encode(tmp: str) -> None:

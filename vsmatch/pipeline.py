@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
@@ -71,8 +70,7 @@ def match(left: np.ndarray, right: np.ndarray, *, max_disp: int,
 
 
 def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
-        config: Config | str | None = None,
-        on_stage: Callable[[str], None] | None = None) -> MatchResult:
+        config: Config | str | None = None) -> MatchResult:
     """:func:`match` with per-stage timings and the left-right labels."""
     cfg = load_config(config)
     check_pair(left, right, max_disp, cfg)
@@ -81,8 +79,6 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
 
     @contextmanager
     def stage(name: str):
-        if on_stage is not None:
-            on_stage(name)
         start = time.perf_counter()
         yield
         seconds[name] = seconds.get(name, 0.0) + time.perf_counter() - start
