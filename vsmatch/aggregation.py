@@ -27,17 +27,19 @@ def cross_arms(image: np.ndarray, theta: np.ndarray, sensitivity: np.ndarray,
 
 
 def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
-                    *, iterations: int) -> np.ndarray:
+                    *, iterations: int, scratch: np.ndarray | None = None) -> np.ndarray:
     """Average the cost over each pixel's cross support region, ``iterations`` times.
 
     The first iteration sums rows then columns, the next columns then rows, and so on.
     At disparity d each arm is the shorter of the left pixel's and the right pixel
-    (x - d)'s. ``volume`` is used as a work buffer and overwritten.
+    (x - d)'s. ``volume`` is used as a work buffer and overwritten, as is ``scratch``, a
+    float32 volume of the same shape, if given.
     """
     current = np.ascontiguousarray(volume, dtype=np.float32)
     # One scratch volume: the first pass of each iteration writes it, the second writes
     # the result back over ``current``, so aggregation holds two volumes at most.
-    scratch = np.empty_like(current)
+    if scratch is None:
+        scratch = np.empty_like(current)
     for it in range(iterations):
         rows_first = it % 2 == 0
         sum_along_arms(current, arms_l, arms_r, rows_first, False, scratch)

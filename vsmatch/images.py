@@ -5,6 +5,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ._kernels.scanline import colour_change as colour_change_kernel
+
 
 def to_grey(image: np.ndarray) -> np.ndarray:
     """Grey level (float32, 0..255) of a BGR colour image or of a grey one."""
@@ -24,10 +26,7 @@ def colour_change(image: np.ndarray, threshold: float, *, along_rows: bool) -> n
     """uint8 (H, W): 1 where the largest channel difference from the previous pixel
     along the axis ((y, x - 1) on rows, (y - 1, x) on columns) is ``threshold`` or more,
     and in the first column (row), which has no previous pixel."""
-    image = as_channels(image).astype(np.int16)
-    out = np.ones(image.shape[:2], dtype=np.uint8)
-    if along_rows:
-        out[:, 1:] = np.abs(image[:, 1:] - image[:, :-1]).max(axis=2) >= threshold
-    else:
-        out[1:, :] = np.abs(image[1:] - image[:-1]).max(axis=2) >= threshold
+    image = as_channels(image)
+    out = np.empty(image.shape[:2], dtype=np.uint8)
+    colour_change_kernel(image, float(threshold), int(along_rows), out)
     return out

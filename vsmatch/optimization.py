@@ -8,22 +8,34 @@ from ._kernels.scanline import scanline_pass
 from .config import ScanlineConfig
 from .images import colour_change
 
+#: Columns walked side by side in the column passes (measured on middlebury2: 4 to 16 are
+#: alike, about twice as fast as one column at a time).
+COLUMN_BLOCK = 8
+
 
 def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
-                      cfg: ScanlineConfig) -> np.ndarray:
+                      cfg: ScanlineConfig, out: np.ndarray | None = None) -> np.ndarray:
     """The mean of the four directional path costs (left, right, up, down), (H, W, D).
 
     P1 and P2 are divided by ``reduce_one`` where the colour changes by ``tau`` or more
     between a pixel and the previous one on the path in one image (left pixel, or its
     match at d in the right image), by ``reduce_both`` where it does in both.
+    ``out``, if given, is a work volume of the same shape to write the result into.
     """
-    out = np.zeros_like(volume)
+    if out is None:
+        out = np.zeros_like(volume)
+    else:
+        out[...] = 0.0
+    height, width, n_disp = volume.shape
     divisors = np.array([1.0, cfg.reduce_one, cfg.reduce_both])
     p1s = (cfg.p1 / divisors).astype(np.float32)
     p2s = (cfg.p2 / divisors).astype(np.float32)
     for along_rows in (1, 0):
         change_l = colour_change(left, cfg.tau, along_rows=bool(along_rows))
         change_r = colour_change(right, cfg.tau, along_rows=bool(along_rows))
-        scanline_pass(volume, change_l, change_r, p1s, p2s, along_rows,
-                      np.float32(0.25), out)
+        # Reversed and padded, so that the right pixels x - d of x lie forward in memory.
+        change_r_rev = np.ones((height, width + n_disp), dtype=np.uint8)
+        change_r_rev[:, :width] = change_r[:, ::-1]
+        scanline_pass(volume, change_l, change_r_rev, p1s, p2s, along_rows, np.float32(0.25),
+                      1 if along_rows else COLUMN_BLOCK, out)
     return out

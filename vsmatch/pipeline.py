@@ -110,15 +110,19 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
             arms_l = aggregation.cross_arms(left, theta_l, grad_l, cfg.arms)
             if cfg.aggregation.iterations > 0:
                 arms_r = aggregation.cross_arms(right, theta_r, grad_r, cfg.arms)
+    # One work volume serves aggregation, then holds the scanline costs: the cost volume
+    # is allocated twice, not three times (allocation is a measurable share of the time).
+    work = np.empty_like(volume)
     if cfg.aggregation.iterations > 0:
         with stage("aggregation"):
-            volume = aggregation.aggregate_cross(volume, arms_l, arms_r,
+            volume = aggregation.aggregate_cross(volume, arms_l, arms_r, scratch=work,
                                                  iterations=cfg.aggregation.iterations)
 
     aggregated = volume
     if cfg.scanline.enabled:
         with stage("scanline"):
-            volume = optimization.scanline_optimise(volume, left, right, cfg.scanline)
+            volume = optimization.scanline_optimise(volume, left, right, cfg.scanline,
+                                                    out=work)
 
     with stage("wta"):
         disp_l = disparity.winner_takes_all(volume)

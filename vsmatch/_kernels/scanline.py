@@ -5,7 +5,71 @@ from . import KERNEL_OPTIONS
 
 
 @njit(**KERNEL_OPTIONS)
-def scanline_pass(cost, change_l, change_r, p1s, p2s, along_rows, weight, out):
+def colour_change(image, threshold, along_rows, out):
+    """out[y, x] = 1 where the largest channel difference between (y, x) and its
+    predecessor along the axis is ``threshold`` or more, and where there is none."""
+    height, width, channels = image.shape
+    for y in prange(height):
+        for x in range(width):
+            if (x == 0) if along_rows else (y == 0):
+                out[y, x] = 1
+                continue
+            py = y - 1 + along_rows
+            px = x - along_rows
+            largest = 0
+            for k in range(channels):
+                largest = max(largest, abs(np.int32(image[y, x, k]) - np.int32(image[py, px, k])))
+            out[y, x] = largest >= threshold
+
+
+@njit(inline="always")
+def _first_step(src, dst, cur, weight, n_disp):
+    """The path starts: its cost is the matching cost. Returns its minimum over d."""
+    new_min = np.float32(np.inf)
+    for d in range(n_disp):
+        v = src[d]
+        cur[d + 1] = v
+        dst[d] += weight * v
+        new_min = v if v < new_min else new_min
+    return new_min
+
+
+@njit(inline="always")
+def _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, prev_min, weight,
+               n_disp, bits):
+    """One step of the path recursion over all d; returns the new minimum over d.
+
+    ``prev``, ``cur``: path costs at 1 + d, with inf at both ends so that d - 1 and d + 1
+    need no tests. ``change_r[d]`` picks the penalties: (p1a, p2a) where the right image
+    does not change at disparity d, (p1b, p2b) where it does. Written without branches and
+    table lookups so that LLVM vectorises the loop over d, and with ``a if a < b else b``
+    rather than ``min``, whose NaN handling Numba compiles into branches that stop it.
+    """
+    for d in range(n_disp):
+        c = change_r[d]
+        q1 = p1b if c else p1a
+        q2 = p2b if c else p2a
+        a = prev[d]
+        b = prev[d + 2]
+        jump1 = (a if a < b else b) + q1
+        stay = prev[d + 1]
+        best = stay if stay < q2 else q2
+        best = best if best < jump1 else jump1
+        v = src[d] + best - prev_min
+        cur[d + 1] = v
+        dst[d] += weight * v
+    # Path costs are >= 0, where float32 bit patterns order like int32: an integer
+    # minimum vectorises, a float one does not.
+    smallest = cur_bits[1]
+    for d in range(n_disp):
+        b = cur_bits[d + 1]
+        smallest = b if b < smallest else smallest
+    bits[0] = smallest
+    return bits.view(np.float32)[0]
+
+
+@njit(**KERNEL_OPTIONS)
+def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, block, out):
     """Add ``weight`` x the path costs of both directions along every row (or column).
 
     C_r(p, d) = C(p, d) + min(C_r(p-r, d), C_r(p-r, d+-1) + P1,
@@ -13,45 +77,47 @@ def scanline_pass(cost, change_l, change_r, p1s, p2s, along_rows, weight, out):
 
     ``change_l[y, x]`` is 1 where the left image's colour changes by ``tau`` or more
     between (y, x) and its predecessor along the axis ((y, x - 1) on rows, (y - 1, x) on
-    columns; 1 where there is none), ``change_r`` the same on the right image; the right
-    pixel of (y, x) at d is (y, x - d). ``p1s[k]``, ``p2s[k]`` are the penalties where
-    ``k`` (0, 1 or 2) of the two images change.
+    columns; 1 where there is none). ``change_r_rev`` is the same map of the right image,
+    reversed along x and padded with ones: ``change_r_rev[y, W - 1 - x + d]`` is the change
+    at the right pixel (y, x - d) of (y, x), 1 where x - d < 0. ``p1s[k]``, ``p2s[k]`` are
+    the penalties where ``k`` (0, 1 or 2) of the two images change.
+
+    ``block`` lines are walked side by side: along columns, so that each step reads
+    ``block`` neighbouring pixels of a row (memory order) rather than one.
     """
     height, width, n_disp = cost.shape
     n_lines = height * along_rows + width * (1 - along_rows)
     length = width * along_rows + height * (1 - along_rows)
-    for line in prange(n_lines):
-        prev = np.empty(n_disp, dtype=np.float32)
-        cur = np.empty(n_disp, dtype=np.float32)
+    n_blocks = (n_lines + block - 1) // block
+    for blk in prange(n_blocks):
+        first = blk * block
+        n_here = min(block, n_lines - first)
+        # Two path-cost rows per line, used in turn as previous and current.
+        paths = np.full((block, 2, n_disp + 2), np.inf, dtype=np.float32)
+        path_bits = paths.view(np.int32)
+        prev_min = np.zeros(block, dtype=np.float32)
+        bits = np.empty(1, dtype=np.int32)
         for direction in (1, -1):
             start = 0 if direction == 1 else length - 1
-            prev_min = np.float32(0.0)
             for step in range(length):
                 i = start + direction * step
-                y = line * along_rows + i * (1 - along_rows)
-                x = i * along_rows + line * (1 - along_rows)
-                if step == 0:
-                    for d in range(n_disp):
-                        cur[d] = cost[y, x, d]
-                else:
+                now = step % 2
+                for k in range(n_here):
+                    line = first + k
+                    y = line * along_rows + i * (1 - along_rows)
+                    x = i * along_rows + line * (1 - along_rows)
+                    if step == 0:
+                        prev_min[k] = _first_step(cost[y, x], out[y, x], paths[k, now],
+                                                  weight, n_disp)
+                        continue
                     # The edge crossed from the previous pixel: stored at the later of
                     # the two pixels along the axis.
                     ey = y if (direction == 1 or along_rows == 1) else y + 1
                     ex = x if (direction == 1 or along_rows == 0) else x + 1
                     cl = change_l[ey, ex]
-                    for d in range(n_disp):
-                        er = ex - d
-                        k = cl + (change_r[ey, er] if er >= 0 else 1)
-                        q1 = p1s[k]
-                        best = min(prev[d], prev_min + p2s[k])
-                        if d > 0:
-                            best = min(best, prev[d - 1] + q1)
-                        if d < n_disp - 1:
-                            best = min(best, prev[d + 1] + q1)
-                        cur[d] = cost[y, x, d] + best - prev_min
-                new_min = cur[0]
-                for d in range(n_disp):
-                    out[y, x, d] += weight * cur[d]
-                    new_min = min(new_min, cur[d])
-                prev_min = new_min
-                prev, cur = cur, prev
+                    m = prev_min[k]
+                    prev_min[k] = _next_step(cost[y, x], out[y, x], paths[k, 1 - now],
+                                             paths[k, now], path_bits[k, now],
+                                             change_r_rev[ey, width - 1 - ex:],
+                                             p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1],
+                                             m, weight, n_disp, bits)
