@@ -7,7 +7,7 @@ import numpy as np
 from ._kernels.aggregate import sum_along_arms
 from ._kernels.arms import cross_arms as _cross_arms_kernel
 from .config import ArmsConfig
-from .images import as_channels
+from .images import as_channels, colour_change
 
 
 def cross_arms(image: np.ndarray, theta: np.ndarray, sensitivity: np.ndarray,
@@ -21,8 +21,10 @@ def cross_arms(image: np.ndarray, theta: np.ndarray, sensitivity: np.ndarray,
     strength = np.minimum(1.0, sensitivity / cfg.g_sat).astype(np.float32)
     out = np.empty((4,) + theta.shape, dtype=np.uint8)  # l2 <= 255 (config range)
     _cross_arms_kernel(image, np.ascontiguousarray(theta, dtype=np.float32), strength,
-                       float(cfg.tau1), float(cfg.tau2), float(cfg.tau3),
-                       int(cfg.l1), int(cfg.l2), float(cfg.kappa), out)
+                       colour_change(image, cfg.tau2, along_rows=True),
+                       colour_change(image, cfg.tau2, along_rows=False),
+                       float(cfg.tau1), float(cfg.tau3), int(cfg.l1), int(cfg.l2),
+                       float(cfg.kappa), out)
     return out
 
 

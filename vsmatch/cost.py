@@ -6,6 +6,7 @@ so the costs of one pixel over all disparities are adjacent in memory.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 from ._kernels.census import census_transform as _census_kernel
@@ -26,8 +27,10 @@ def census_transform(grey: np.ndarray, *, width: int = 9, height: int = 7,
         raise ValueError(f"census window {width}x{height} must be odd-sized with at most "
                          "64 neighbours")
     grey = np.ascontiguousarray(grey, dtype=np.float32)
+    half_w, half_h = width // 2, height // 2
+    padded = cv2.copyMakeBorder(grey, half_h, half_h, half_w, half_w, cv2.BORDER_REPLICATE)
     out = np.empty(grey.shape, dtype=np.uint64)
-    _census_kernel(grey, width // 2, height // 2, np.float32(band), out)
+    _census_kernel(padded, half_w, half_h, np.float32(band), out)
     return out
 
 

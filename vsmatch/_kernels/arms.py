@@ -1,3 +1,5 @@
+import math
+
 import numpy as np
 from numba import njit, prange
 
@@ -21,16 +23,34 @@ def colour_distance(image, y0, x0, y1, x1):
 
 
 @njit(inline="always")
-def _grow_arm(image, y, x, step_y, step_x, limit, tau1_dir, tau2, tau3_dir, l1):
-    """Length of the arm from (y, x) along (step_y, step_x), at most ``limit`` pixels."""
+def _distance_to(image, y, x, anchor):
+    """Largest absolute channel difference between (y, x) and the colour ``anchor``."""
+    if image.shape[2] == 3:  # written out: the common case, and the hot one
+        return max(abs(np.int32(image[y, x, 0]) - anchor[0]),
+                   abs(np.int32(image[y, x, 1]) - anchor[1]),
+                   abs(np.int32(image[y, x, 2]) - anchor[2]))
+    best = np.int32(0)
+    for k in range(image.shape[2]):
+        best = max(best, abs(np.int32(image[y, x, k]) - anchor[k]))
+    return best
+
+
+@njit(inline="always")
+def _grow_arm(image, breaks, y, x, step_y, step_x, limit, tau1_dir, tau3_dir, l1, anchor):
+    """Length of the arm from (y, x) along (step_y, step_x), at most ``limit`` pixels.
+
+    ``breaks`` marks the steps across which the colour changes by tau2 or more, stored at
+    the later pixel of the two in image order. The thresholds are integers (the distances
+    are), rounded up from the scaled ones.
+    """
     k = 0
     while k < limit:
         ny = y + (k + 1) * step_y
         nx = x + (k + 1) * step_x
-        to_anchor = colour_distance(image, ny, nx, y, x)
-        if to_anchor >= tau1_dir:
+        if breaks[ny - min(step_y, 0), nx - min(step_x, 0)]:
             break
-        if colour_distance(image, ny, nx, ny - step_y, nx - step_x) >= tau2:
+        to_anchor = _distance_to(image, ny, nx, anchor)
+        if to_anchor >= tau1_dir:
             break
         if k + 1 > l1 and to_anchor >= tau3_dir:
             break
@@ -39,24 +59,33 @@ def _grow_arm(image, y, x, step_y, step_x, limit, tau1_dir, tau2, tau3_dir, l1):
 
 
 @njit(**KERNEL_OPTIONS)
-def cross_arms(image, theta, strength, tau1, tau2, tau3, l1, l2, kappa, out):
+def cross_arms(image, theta, strength, breaks_h, breaks_v, tau1, tau3, l1, l2, kappa, out):
     """Arm lengths (left, right, up, down) of every pixel, as in ALGORITHM.md §3.
 
     ``strength`` is s_p = min(1, G / G_sat). The colour thresholds tau1 and tau3 are scaled
     by f = 1 + kappa * |cos(theta - phi)| * s_p, phi = 0 for horizontal arms and pi/2 for
-    vertical ones.
+    vertical ones. ``breaks_h``, ``breaks_v``: 1 where the colour changes by tau2 or more
+    from the previous pixel along the row, along the column.
     """
     height, width = theta.shape
     for y in prange(height):
+        anchor = np.empty(image.shape[2], dtype=np.int32)
         for x in range(width):
-            s = strength[y, x]
-            fh = max(0.0, 1.0 + kappa * abs(np.cos(theta[y, x])) * s)
-            fv = max(0.0, 1.0 + kappa * abs(np.sin(theta[y, x])) * s)
-            th1, th3 = tau1 * fh, tau3 * fh
-            out[LEFT, y, x] = _grow_arm(image, y, x, 0, -1, min(l2, x), th1, tau2, th3, l1)
-            out[RIGHT, y, x] = _grow_arm(image, y, x, 0, 1, min(l2, width - 1 - x),
-                                         th1, tau2, th3, l1)
-            tv1, tv3 = tau1 * fv, tau3 * fv
-            out[UP, y, x] = _grow_arm(image, y, x, -1, 0, min(l2, y), tv1, tau2, tv3, l1)
-            out[DOWN, y, x] = _grow_arm(image, y, x, 1, 0, min(l2, height - 1 - y),
-                                        tv1, tau2, tv3, l1)
+            fh = 1.0
+            fv = 1.0
+            if kappa != 0.0:  # the cosine and sine cost as much as the arms themselves
+                s = strength[y, x]
+                fh = max(0.0, 1.0 + kappa * abs(np.cos(theta[y, x])) * s)
+                fv = max(0.0, 1.0 + kappa * abs(np.sin(theta[y, x])) * s)
+            th1, th3 = math.ceil(tau1 * fh), math.ceil(tau3 * fh)
+            tv1, tv3 = math.ceil(tau1 * fv), math.ceil(tau3 * fv)
+            for k in range(image.shape[2]):
+                anchor[k] = image[y, x, k]
+            out[LEFT, y, x] = _grow_arm(image, breaks_h, y, x, 0, -1, min(l2, x),
+                                        th1, th3, l1, anchor)
+            out[RIGHT, y, x] = _grow_arm(image, breaks_h, y, x, 0, 1, min(l2, width - 1 - x),
+                                         th1, th3, l1, anchor)
+            out[UP, y, x] = _grow_arm(image, breaks_v, y, x, -1, 0, min(l2, y),
+                                      tv1, tv3, l1, anchor)
+            out[DOWN, y, x] = _grow_arm(image, breaks_v, y, x, 1, 0, min(l2, height - 1 - y),
+                                        tv1, tv3, l1, anchor)

@@ -5,26 +5,30 @@ from . import KERNEL_OPTIONS
 
 
 @njit(**KERNEL_OPTIONS)
-def census_transform(grey, half_w, half_h, band, out):
+def census_transform(padded, half_w, half_h, band, out):
     """One bit per window neighbour q (row-major, centre skipped): [g(q) < g(p) - band].
 
-    Pixels outside the image repeat the nearest border pixel.
+    ``padded`` is the grey image with ``half_h`` rows and ``half_w`` columns of repeated
+    border pixels on each side. Each row is built one window offset at a time, so that the
+    loop over x (shift, compare, or) vectorises.
     """
-    height, width = grey.shape
+    height, width = out.shape
     for y in prange(height):
+        bits = np.zeros(width, dtype=np.uint64)
+        centre = np.empty(width, dtype=np.float32)
+        centre_row = padded[y + half_h, half_w:half_w + width]
         for x in range(width):
-            centre = grey[y, x] - band
-            bits = np.uint64(0)
-            for dy in range(-half_h, half_h + 1):
-                yy = min(max(y + dy, 0), height - 1)
-                for dx in range(-half_w, half_w + 1):
-                    if dy == 0 and dx == 0:
-                        continue
-                    xx = min(max(x + dx, 0), width - 1)
-                    bits = bits << np.uint64(1)
-                    if grey[yy, xx] < centre:
-                        bits = bits | np.uint64(1)
-            out[y, x] = bits
+            centre[x] = centre_row[x] - band
+        for dy in range(-half_h, half_h + 1):
+            row = padded[y + half_h + dy]
+            for dx in range(-half_w, half_w + 1):
+                if dy == 0 and dx == 0:
+                    continue
+                neighbour = row[half_w + dx:half_w + dx + width]
+                for x in range(width):
+                    bits[x] = (bits[x] << np.uint64(1)) | np.uint64(neighbour[x] < centre[x])
+        for x in range(width):
+            out[y, x] = bits[x]
 
 
 @njit(inline="always")
