@@ -32,9 +32,11 @@ def test_arms_of_a_flat_image_reach_l2_or_the_border():
     assert arms[:, 0, 0].tolist() == [0, 10, 0, 8]
 
 
+@pytest.mark.parametrize("method", ["running", "direct"])
 @pytest.mark.parametrize("iterations", [1, 2, 3])
-def test_aggregation_matches_explicit_region_average(rng, iterations):
-    h, w, n = 8, 11, 4
+@pytest.mark.parametrize("n", [4, 37])  # 37: vector steps of 16 and a remainder
+def test_aggregation_matches_explicit_region_average(rng, iterations, method, n):
+    h, w = 8, 11
     volume = rng.random((h, w, n), dtype=np.float32)
     arms_l = rng.integers(0, 4, size=(h, w, 4)).astype(np.int32)
     arms_r = rng.integers(0, 4, size=(h, w, 4)).astype(np.int32)
@@ -47,8 +49,36 @@ def test_aggregation_matches_explicit_region_average(rng, iterations):
         arms[..., 3] = np.minimum(arms[..., 3], (h - 1 - ys)[:, None])
     want = reference.aggregate(volume, arms_l, arms_r, iterations)
     got = aggregation.aggregate_cross(volume.copy(), planes(arms_l), planes(arms_r),
-                                      iterations=iterations)
+                                      iterations=iterations, method=method)
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
+
+
+def test_aggregation_methods_agree_on_real_arms(rng):
+    """Long arms and a wide range: both methods, and the rule's choice, on one volume."""
+    image = np.zeros((30, 50, 3), np.uint8)
+    image[:, 25:] = 200  # two flat halves: arms up to the step or the border
+    theta = np.zeros((30, 50), np.float32)
+    grad = np.zeros((30, 50), np.float32)
+    arms = aggregation.cross_arms(image, theta, grad, ArmsConfig(l1=5, l2=20))
+    volume = rng.random((30, 50, 40), dtype=np.float32)
+    results = [aggregation.aggregate_cross(volume.copy(), arms, arms, iterations=2,
+                                           method=method)
+               for method in aggregation.AGGREGATION_METHODS]
+    for other in results[1:]:
+        np.testing.assert_allclose(other, results[0], rtol=1e-5, atol=1e-6)
+
+
+def test_aggregation_method_is_checked():
+    with pytest.raises(ValueError, match="aggregation method"):
+        aggregation.aggregate_cross(np.zeros((2, 2, 2), np.float32),
+                                    np.zeros((4, 2, 2), np.uint8),
+                                    np.zeros((4, 2, 2), np.uint8), iterations=1,
+                                    method="fast")
+
+
+def test_direct_sums_are_chosen_for_short_arms_and_wide_ranges():
+    assert aggregation.direct_is_faster(3.4, 60)
+    assert not aggregation.direct_is_faster(14.2, 16)
 
 
 def test_aggregation_keeps_a_constant_volume():

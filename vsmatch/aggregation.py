@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels.aggregate import sum_along_arms
+from ._kernels.aggregate import sum_along_arms, sum_over_arms
 from ._kernels.arms import cross_arms as _cross_arms_kernel
 from .config import ArmsConfig
 from .images import as_channels, colour_change
@@ -28,22 +28,59 @@ def cross_arms(image: np.ndarray, theta: np.ndarray, sensitivity: np.ndarray,
     return out
 
 
+#: How the sums over the arms are taken: "running" sums (work per pixel ~ n_disp, scalar),
+#: "direct" sums of the arm pixels (work ~ arm length x n_disp / vector width), or "auto":
+#: per pass, whichever :func:`direct_is_faster` predicts.
+AGGREGATION_METHODS = ("auto", "running", "direct")
+
+
+def direct_is_faster(mean_arm: float, n_disp: int) -> bool:
+    """Whether direct sums beat running sums for this mean arm length (one side plus the
+    other, along the pass) and disparity count.
+
+    Direct sums cost about (1 + mean_arm) vector steps of 16 disparities each per pixel,
+    running sums about n_disp scalar steps. The constant is measured on middlebury2
+    (scripts/aggregation_methods.py): direct wins on teddy and cones (60 disparities, arms
+    of 3 to 6 pixels) and loses on tsukuba and venus (16 and 20 disparities, 9 to 14).
+    """
+    return (1.0 + mean_arm) * -(-n_disp // 16) * 16 < 9.0 * n_disp
+
+
 def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
-                    *, iterations: int, scratch: np.ndarray | None = None) -> np.ndarray:
+                    *, iterations: int, scratch: np.ndarray | None = None,
+                    method: str = "auto") -> np.ndarray:
     """Average the cost over each pixel's cross support region, ``iterations`` times.
 
     The first iteration sums rows then columns, the next columns then rows, and so on.
     At disparity d each arm is the shorter of the left pixel's and the right pixel
     (x - d)'s. ``volume`` is used as a work buffer and overwritten, as is ``scratch``, a
-    float32 volume of the same shape, if given.
+    float32 volume of the same shape, if given. ``method``: one of
+    :data:`AGGREGATION_METHODS`; they agree to float32 rounding.
     """
+    if method not in AGGREGATION_METHODS:
+        raise ValueError(f"aggregation method must be one of {AGGREGATION_METHODS}, "
+                         f"got {method!r}")
     current = np.ascontiguousarray(volume, dtype=np.float32)
     # One scratch volume: the first pass of each iteration writes it, the second writes
     # the result back over ``current``, so aggregation holds two volumes at most.
     if scratch is None:
         scratch = np.empty_like(current)
+    height, width, n_disp = current.shape
+    arms_r_rev = np.full((4, height, width + n_disp), 255, dtype=np.uint8)
+    arms_r_rev[:, :, :width] = arms_r[:, :, ::-1]
+    mean_arm = {True: float(arms_l[0].mean() + arms_l[1].mean()),
+                False: float(arms_l[2].mean() + arms_l[3].mean())}
+
+    def one_pass(src, along_rows, normalise, out):
+        direct = (method == "direct" or method == "auto"
+                  and direct_is_faster(mean_arm[along_rows], n_disp))
+        if direct:
+            sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, out)
+        else:
+            sum_along_arms(src, arms_l, arms_r, along_rows, normalise, out)
+
     for it in range(iterations):
         rows_first = it % 2 == 0
-        sum_along_arms(current, arms_l, arms_r, rows_first, False, scratch)
-        sum_along_arms(scratch, arms_l, arms_r, not rows_first, True, current)
+        one_pass(current, rows_first, False, scratch)
+        one_pass(scratch, not rows_first, True, current)
     return current

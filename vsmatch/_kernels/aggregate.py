@@ -64,3 +64,79 @@ def sum_along_arms(src, arms_l, arms_r, along_rows, normalise, out):
                 if normalise:
                     total /= counts[hi, d] - counts[lo, d]
                 out[y, x, d] = total
+
+
+@njit(inline="always")
+def _shorter(a, b):
+    # A conditional expression, not min(): Numba's min stops LLVM vectorising the loop.
+    a = np.int32(a)
+    b = np.int32(b)
+    return a if a < b else b
+
+
+@njit(inline="always")
+def _arms_across(arms_l, arms_r_rev, first_lo, first_hi, y, x):
+    """The left pixel's two arms across the pass, and its right pixels' (over d)."""
+    start = arms_l.shape[2] - 1 - x  # width - 1 - x
+    return (arms_l[first_lo, y, x], arms_l[first_hi, y, x],
+            arms_r_rev[first_lo, y, start:], arms_r_rev[first_hi, y, start:])
+
+
+@njit(**KERNEL_OPTIONS)
+def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, out):
+    """:func:`sum_along_arms` by direct sums: each pixel adds its arm pixels' costs.
+
+    The work is proportional to the arm lengths rather than to one running sum per pixel,
+    and every loop runs over d, contiguous and branch-free, so LLVM vectorises it: faster
+    than running sums where arms are short and the disparity range is wide.
+
+    ``arms_r_rev`` is the right view's arms reversed along x and padded with 255:
+    ``arms_r_rev[a, y, W - 1 - x + d]`` is arm ``a`` of right pixel (y, x - d), 255 (no
+    limit) where x - d < 0, so the arms of the right pixels of x lie forward in memory.
+    """
+    height, width, n_disp = src.shape
+    lo_arm = LEFT if along_rows else UP
+    hi_arm = RIGHT if along_rows else DOWN
+    first_lo = UP if along_rows else LEFT
+    first_hi = DOWN if along_rows else RIGHT
+    step_y = 1 - along_rows
+    step_x = along_rows
+    for y in prange(height):
+        total = np.empty(n_disp, dtype=np.float32)
+        size = np.empty(n_disp, dtype=np.float32)
+        for x in range(width):
+            centre = src[y, x]
+            for d in range(n_disp):
+                total[d] = centre[d]
+            if normalise:
+                f_lo, f_hi, g_lo, g_hi = _arms_across(arms_l, arms_r_rev, first_lo, first_hi,
+                                                      y, x)
+                for d in range(n_disp):
+                    size[d] = np.float32(1 + _shorter(f_lo, g_lo[d]) + _shorter(f_hi, g_hi[d]))
+            for side in range(2):
+                arm = lo_arm if side == 0 else hi_arm
+                sign = -1 if side == 0 else 1
+                reach_r = arms_r_rev[arm, y, width - 1 - x:]
+                for k in range(1, np.int64(arms_l[arm, y, x]) + 1):
+                    ny = y + sign * k * step_y
+                    nx = x + sign * k * step_x
+                    k32 = np.int32(k)
+                    neighbour = src[ny, nx]
+                    for d in range(n_disp):
+                        inside = k32 <= np.int32(reach_r[d])
+                        total[d] += neighbour[d] if inside else np.float32(0.0)
+                    if normalise:
+                        # The neighbour's first-pass region: its combined arms across.
+                        f_lo, f_hi, g_lo, g_hi = _arms_across(arms_l, arms_r_rev, first_lo,
+                                                              first_hi, ny, nx)
+                        for d in range(n_disp):
+                            inside = k32 <= np.int32(reach_r[d])
+                            n = np.float32(1 + _shorter(f_lo, g_lo[d]) + _shorter(f_hi, g_hi[d]))
+                            size[d] += n if inside else np.float32(0.0)
+            result = out[y, x]
+            if normalise:
+                for d in range(n_disp):
+                    result[d] = total[d] / size[d]
+            else:
+                for d in range(n_disp):
+                    result[d] = total[d]
