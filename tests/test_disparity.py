@@ -19,6 +19,15 @@ def test_winner_takes_all_ties_take_smallest_disparity():
     assert np.all(disparity.winner_takes_all(volume) == 0)
 
 
+@pytest.mark.parametrize("n_disp", [3, 37])
+def test_winner_takes_all_in_one_pass_matches_both_views(rng, n_disp):
+    # Few distinct values, so that ties are common in both views.
+    volume = np.round(rng.random((6, 40, n_disp), dtype=np.float32) * 4)
+    got_l, got_r = disparity.winner_takes_all_both(volume)
+    np.testing.assert_array_equal(got_l, volume.argmin(axis=2))
+    np.testing.assert_array_equal(got_r, reference.wta_right(volume))
+
+
 def test_left_right_check_matches_reference(rng):
     dl = rng.integers(0, 5, size=(9, 14)).astype(np.int32)
     dr = rng.integers(0, 5, size=(9, 14)).astype(np.int32)

@@ -29,6 +29,14 @@ def winner_takes_all_right(volume: np.ndarray) -> np.ndarray:
     return out
 
 
+def winner_takes_all_both(volume: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`winner_takes_all` and :func:`winner_takes_all_right` in one pass."""
+    out_l = np.empty(volume.shape[:2], dtype=np.int32)
+    out_r = np.empty(volume.shape[:2], dtype=np.int32)
+    _k.winner_takes_all_both(volume, out_l, out_r)
+    return out_l, out_r
+
+
 def left_right_check(disp_l: np.ndarray, disp_r: np.ndarray, *, n_disp: int,
                      tolerance: int) -> np.ndarray:
     """Labels (uint8, (H, W)): VALID where ``|d_L(p) - d_R(x - d_L(p))| <= tolerance``;

@@ -125,12 +125,14 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
                                                     out=work)
 
     with stage("wta"):
-        disp_l = disparity.winner_takes_all(volume)
+        if cfg.consistency.enabled:
+            disp_l, disp_r = disparity.winner_takes_all_both(volume)
+        else:
+            disp_l = disparity.winner_takes_all(volume)
 
     labels = None
     if cfg.consistency.enabled:
         with stage("consistency"):
-            disp_r = disparity.winner_takes_all_right(volume)
             labels = disparity.left_right_check(disp_l, disp_r, n_disp=n_disp,
                                                 tolerance=cfg.consistency.tolerance)
         if cfg.voting.enabled:

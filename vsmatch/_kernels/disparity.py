@@ -29,6 +29,45 @@ def winner_takes_all(volume, right_view, out):
 
 
 @njit(**KERNEL_OPTIONS)
+def winner_takes_all_both(volume, out_l, out_r):
+    """:func:`winner_takes_all` of both views in one pass over the volume.
+
+    The right view's candidates of right pixel xr sit on a diagonal, (xr + d, d); reading
+    the volume in memory order instead, cost (x, d) is offered to right pixel x - d. Each
+    right pixel sees its candidates in increasing d, so ties keep the smaller d there too.
+    The updates are written as selects, without branches, so that they vectorise.
+    """
+    height, width, n_disp = volume.shape
+    for y in prange(height):
+        best_r = np.empty(width + n_disp, dtype=volume.dtype)
+        best_rd = np.empty(width + n_disp, dtype=np.int32)
+        # Reversed: right pixel xr is at width - 1 - xr, so x - d lies forward in memory.
+        for x in range(width):
+            costs = volume[y, x]
+            best = 0
+            best_cost = costs[0]
+            for d in range(1, n_disp):
+                c = costs[d]
+                if c < best_cost:
+                    best_cost = c
+                    best = d
+            out_l[y, x] = best
+            # Views from x's place on: indexes that Numba knows are >= 0 stay affine.
+            cost_r = best_r[width - 1 - x:]
+            disp_r = best_rd[width - 1 - x:]
+            cost_r[0] = costs[0]
+            disp_r[0] = 0
+            for d in range(1, min(n_disp, x + 1)):
+                c = costs[d]
+                b = cost_r[d]
+                take = c < b
+                cost_r[d] = c if take else b
+                disp_r[d] = np.int32(d) if take else disp_r[d]
+        for x in range(width):
+            out_r[y, x] = best_rd[width - 1 - x]
+
+
+@njit(**KERNEL_OPTIONS)
 def left_right_check(disp_l, disp_r, n_disp, tolerance, labels):
     """Label each left pixel VALID, OCCLUDED (no disparity would pass) or MISMATCHED."""
     height, width = disp_l.shape
