@@ -49,6 +49,11 @@ def max_cost(cfg: CostConfig) -> float:
 GRADIENT_STEPS = 4
 
 
+def _reversed(image: np.ndarray) -> np.ndarray:
+    """``image`` mirrored along x, C-contiguous."""
+    return np.ascontiguousarray(image[:, ::-1])
+
+
 def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
                 census_l: np.ndarray, census_r: np.ndarray,
                 grad_l: np.ndarray, grad_r: np.ndarray,
@@ -73,6 +78,7 @@ def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
         ad_table = rho(np.arange(255 * channels + 1) / channels, cfg.lambda_ad).astype(
             np.float32)
     out = np.empty((height, width, n_disp), dtype=np.float32)
-    matching_cost_volume(census_l, census_r, q_l, q_r, colour_l, colour_r, census_table,
-                         grad_table, ad_table, np.float32(max_cost(cfg)), out)
+    matching_cost_volume(census_l, _reversed(census_r), q_l, _reversed(q_r), colour_l,
+                         _reversed(colour_r), census_table, grad_table, ad_table,
+                         np.float32(max_cost(cfg)), out)
     return out
