@@ -52,7 +52,7 @@ def main() -> None:
             axes = (0, 1) if along_rows else (2, 3)
             mean_arm = float(arms_l[axes[0]].mean() + arms_l[axes[1]].mean())
             for normalise in (False, True):
-                running = median_ms(lambda: sum_along_arms(volume, arms_l, arms_r, along_rows,
+                running = median_ms(lambda: sum_along_arms(volume, arms_l, arms_r_rev, along_rows,
                                                            normalise, out))
                 direct = median_ms(lambda: sum_over_arms(volume, arms_l, arms_r_rev,
                                                          along_rows, normalise, out))

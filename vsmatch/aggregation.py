@@ -77,7 +77,7 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
         if direct:
             sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, out)
         else:
-            sum_along_arms(src, arms_l, arms_r, along_rows, normalise, out)
+            sum_along_arms(src, arms_l, arms_r_rev, along_rows, normalise, out)
 
     for it in range(iterations):
         rows_first = it % 2 == 0
