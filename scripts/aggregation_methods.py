@@ -16,7 +16,7 @@ import numpy as np
 from vsmatch import aggregation, cost, datasets, sensitivity
 from vsmatch._kernels.aggregate import sum_along_arms, sum_over_arms
 from vsmatch.config import load_config
-from vsmatch.images import to_grey
+from vsmatch.images import mirrored, to_grey
 
 
 def median_ms(fn, repeats=7):
@@ -44,9 +44,7 @@ def main() -> None:
                                   n_disp=n_disp, cfg=cfg.cost)
         arms_l = aggregation.cross_arms(scene.left, theta_l, grad_l, cfg.arms)
         arms_r = aggregation.cross_arms(scene.right, theta_r, grad_r, cfg.arms)
-        height, width = arms_l.shape[1:]
-        arms_r_rev = np.full((4, height, width + n_disp), 255, dtype=np.uint8)
-        arms_r_rev[:, :, :width] = arms_r[:, :, ::-1]
+        arms_r_rev = mirrored(arms_r, pad=n_disp, fill=255)  # as aggregate_cross gives them
         out = np.empty_like(volume)
         for along_rows in (True, False):
             axes = (0, 1) if along_rows else (2, 3)

@@ -7,7 +7,7 @@ import numpy as np
 from ._kernels.aggregate import sum_along_arms, sum_over_arms
 from ._kernels.arms import cross_arms as _cross_arms_kernel
 from .config import ArmsConfig
-from .images import as_channels, colour_change
+from .images import as_channels, colour_change, mirrored
 
 
 def cross_arms(image: np.ndarray, theta: np.ndarray, sensitivity: np.ndarray,
@@ -65,9 +65,8 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
     # the result back over ``current``, so aggregation holds two volumes at most.
     if scratch is None:
         scratch = np.empty_like(current)
-    height, width, n_disp = current.shape
-    arms_r_rev = np.full((4, height, width + n_disp), 255, dtype=np.uint8)
-    arms_r_rev[:, :, :width] = arms_r[:, :, ::-1]
+    n_disp = current.shape[2]
+    arms_r_rev = mirrored(arms_r, pad=n_disp, fill=255)  # no right pixel: no limit
     mean_arm = {True: float(arms_l[0].mean() + arms_l[1].mean()),
                 False: float(arms_l[2].mean() + arms_l[3].mean())}
 

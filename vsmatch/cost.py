@@ -12,7 +12,7 @@ import numpy as np
 from ._kernels.census import census_transform as _census_kernel
 from ._kernels.cost import matching_cost_volume
 from .config import CostConfig
-from .images import as_channels
+from .images import as_channels, mirrored
 
 
 def census_transform(grey: np.ndarray, *, width: int = 9, height: int = 7,
@@ -49,11 +49,6 @@ def max_cost(cfg: CostConfig) -> float:
 GRADIENT_STEPS = 4
 
 
-def _reversed(image: np.ndarray) -> np.ndarray:
-    """``image`` mirrored along x, C-contiguous."""
-    return np.ascontiguousarray(image[:, ::-1])
-
-
 def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
                 census_l: np.ndarray, census_r: np.ndarray,
                 grad_l: np.ndarray, grad_r: np.ndarray,
@@ -78,7 +73,7 @@ def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
         ad_table = rho(np.arange(255 * channels + 1) / channels, cfg.lambda_ad).astype(
             np.float32)
     out = np.empty((height, width, n_disp), dtype=np.float32)
-    matching_cost_volume(census_l, _reversed(census_r), q_l, _reversed(q_r), colour_l,
-                         _reversed(colour_r), census_table, grad_table, ad_table,
-                         np.float32(max_cost(cfg)), out)
+    matching_cost_volume(census_l, mirrored(census_r, axis=1), q_l, mirrored(q_r, axis=1),
+                         colour_l, mirrored(colour_r, axis=1), census_table, grad_table,
+                         ad_table, np.float32(max_cost(cfg)), out)
     return out

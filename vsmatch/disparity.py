@@ -18,15 +18,13 @@ VALID, OCCLUDED, MISMATCHED = _k.VALID, _k.OCCLUDED, _k.MISMATCHED
 def winner_takes_all(volume: np.ndarray) -> np.ndarray:
     """Left-view disparity ``argmin_d C(p, d)`` as int32 (H, W); ties take the smaller d."""
     out = np.empty(volume.shape[:2], dtype=np.int32)
-    _k.winner_takes_all(volume, 0, out)
+    _k.winner_takes_all(volume, out)
     return out
 
 
 def winner_takes_all_right(volume: np.ndarray) -> np.ndarray:
     """Right-view disparity ``argmin_d C((x + d, y), d)`` from the left volume, int32."""
-    out = np.empty(volume.shape[:2], dtype=np.int32)
-    _k.winner_takes_all(volume, 1, out)
-    return out
+    return winner_takes_all_both(volume)[1]
 
 
 def winner_takes_all_both(volume: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ._kernels.scanline import colour_change as colour_change_kernel
+from ._kernels.arms import colour_change as colour_change_kernel
 
 
 def to_grey(image: np.ndarray) -> np.ndarray:
@@ -29,4 +29,21 @@ def colour_change(image: np.ndarray, threshold: float, *, along_rows: bool) -> n
     image = as_channels(image)
     out = np.empty(image.shape[:2], dtype=np.uint8)
     colour_change_kernel(image, float(threshold), int(along_rows), out)
+    return out
+
+
+def mirrored(array: np.ndarray, *, axis: int = -1, pad: int = 0, fill: int = 0) -> np.ndarray:
+    """``array`` reversed along ``axis`` (its x axis), then ``pad`` entries of ``fill``;
+    C-contiguous.
+
+    The kernels read the right view this way: the right pixel x - d of x, at
+    ``width - 1 - x + d``, lies forward in memory, and the padding stands for x - d < 0.
+    """
+    axis = axis % array.ndim
+    shape = list(array.shape)
+    shape[axis] += pad
+    out = np.full(shape, fill, dtype=array.dtype)
+    inside = [slice(None)] * array.ndim
+    inside[axis] = slice(0, array.shape[axis])
+    out[tuple(inside)] = np.flip(array, axis)
     return out

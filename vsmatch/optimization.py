@@ -6,7 +6,7 @@ import numpy as np
 
 from ._kernels.scanline import scanline_pass
 from .config import ScanlineConfig
-from .images import colour_change
+from .images import colour_change, mirrored
 
 #: Columns walked side by side in the column passes (measured on middlebury2: 4 to 16 are
 #: alike, about twice as fast as one column at a time).
@@ -26,16 +26,14 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
         out = np.zeros_like(volume)
     else:
         out[...] = 0.0
-    height, width, n_disp = volume.shape
+    n_disp = volume.shape[2]
     divisors = np.array([1.0, cfg.reduce_one, cfg.reduce_both])
     p1s = (cfg.p1 / divisors).astype(np.float32)
     p2s = (cfg.p2 / divisors).astype(np.float32)
     for along_rows in (1, 0):
         change_l = colour_change(left, cfg.tau, along_rows=bool(along_rows))
         change_r = colour_change(right, cfg.tau, along_rows=bool(along_rows))
-        # Reversed and padded, so that the right pixels x - d of x lie forward in memory.
-        change_r_rev = np.ones((height, width + n_disp), dtype=np.uint8)
-        change_r_rev[:, :width] = change_r[:, ::-1]
+        change_r_rev = mirrored(change_r, pad=n_disp, fill=1)  # no right pixel: a change
         scanline_pass(volume, change_l, change_r_rev, p1s, p2s, along_rows, np.float32(0.25),
                       1 if along_rows else COLUMN_BLOCK, out)
     return out

@@ -22,21 +22,22 @@ def colour_distance(image, y0, x0, y1, x1):
     return best
 
 
-@njit(inline="always")
-def _distance_to(image, y, x, anchor):
-    """Largest absolute channel difference between (y, x) and the colour ``anchor``."""
-    if image.shape[2] == 3:  # written out: the common case, and the hot one
-        return max(abs(np.int32(image[y, x, 0]) - anchor[0]),
-                   abs(np.int32(image[y, x, 1]) - anchor[1]),
-                   abs(np.int32(image[y, x, 2]) - anchor[2]))
-    best = np.int32(0)
-    for k in range(image.shape[2]):
-        best = max(best, abs(np.int32(image[y, x, k]) - anchor[k]))
-    return best
+@njit(**KERNEL_OPTIONS)
+def colour_change(image, threshold, along_rows, out):
+    """out[y, x] = 1 where the colour distance between (y, x) and its predecessor along the
+    axis is ``threshold`` or more, and where there is none."""
+    height, width = out.shape
+    for y in prange(height):
+        for x in range(width):
+            if (x == 0) if along_rows else (y == 0):
+                out[y, x] = 1
+            else:
+                out[y, x] = colour_distance(image, y, x, y - 1 + along_rows,
+                                            x - along_rows) >= threshold
 
 
 @njit(inline="always")
-def _grow_arm(image, breaks, y, x, step_y, step_x, limit, tau1_dir, tau3_dir, l1, anchor):
+def _grow_arm(image, breaks, y, x, step_y, step_x, limit, tau1_dir, tau3_dir, l1):
     """Length of the arm from (y, x) along (step_y, step_x), at most ``limit`` pixels.
 
     ``breaks`` marks the steps across which the colour changes by tau2 or more, stored at
@@ -49,7 +50,7 @@ def _grow_arm(image, breaks, y, x, step_y, step_x, limit, tau1_dir, tau3_dir, l1
         nx = x + (k + 1) * step_x
         if breaks[ny - min(step_y, 0), nx - min(step_x, 0)]:
             break
-        to_anchor = _distance_to(image, ny, nx, anchor)
+        to_anchor = colour_distance(image, ny, nx, y, x)
         if to_anchor >= tau1_dir:
             break
         if k + 1 > l1 and to_anchor >= tau3_dir:
@@ -69,7 +70,6 @@ def cross_arms(image, theta, strength, breaks_h, breaks_v, tau1, tau3, l1, l2, k
     """
     height, width = theta.shape
     for y in prange(height):
-        anchor = np.empty(image.shape[2], dtype=np.int32)
         for x in range(width):
             fh = 1.0
             fv = 1.0
@@ -79,13 +79,11 @@ def cross_arms(image, theta, strength, breaks_h, breaks_v, tau1, tau3, l1, l2, k
                 fv = max(0.0, 1.0 + kappa * abs(np.sin(theta[y, x])) * s)
             th1, th3 = math.ceil(tau1 * fh), math.ceil(tau3 * fh)
             tv1, tv3 = math.ceil(tau1 * fv), math.ceil(tau3 * fv)
-            for k in range(image.shape[2]):
-                anchor[k] = image[y, x, k]
             out[LEFT, y, x] = _grow_arm(image, breaks_h, y, x, 0, -1, min(l2, x),
-                                        th1, th3, l1, anchor)
+                                        th1, th3, l1)
             out[RIGHT, y, x] = _grow_arm(image, breaks_h, y, x, 0, 1, min(l2, width - 1 - x),
-                                         th1, th3, l1, anchor)
+                                         th1, th3, l1)
             out[UP, y, x] = _grow_arm(image, breaks_v, y, x, -1, 0, min(l2, y),
-                                      tv1, tv3, l1, anchor)
+                                      tv1, tv3, l1)
             out[DOWN, y, x] = _grow_arm(image, breaks_v, y, x, 1, 0, min(l2, height - 1 - y),
-                                        tv1, tv3, l1, anchor)
+                                        tv1, tv3, l1)

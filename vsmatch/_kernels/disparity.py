@@ -7,32 +7,34 @@ from .arms import colour_distance
 VALID, OCCLUDED, MISMATCHED = 0, 1, 2
 
 
-@njit(**KERNEL_OPTIONS)
-def winner_takes_all(volume, right_view, out):
-    """Smallest-cost disparity per pixel; ties take the smaller d.
+@njit(inline="always")
+def _argmin(costs, n_disp):
+    """The d of the smallest of ``costs[:n_disp]``; ties take the smaller d."""
+    best = 0
+    best_cost = costs[0]
+    for d in range(1, n_disp):
+        c = costs[d]
+        if c < best_cost:
+            best_cost = c
+            best = d
+    return best
 
-    Left view: argmin_d volume[y, x, d]. Right view (``right_view`` = 1), from the same
-    left volume: argmin_d volume[y, x + d, d] over the d with x + d inside the image.
-    """
+
+@njit(**KERNEL_OPTIONS)
+def winner_takes_all(volume, out):
+    """Left-view smallest-cost disparity per pixel: argmin_d volume[y, x, d]."""
     height, width, n_disp = volume.shape
     for y in prange(height):
         for x in range(width):
-            last = n_disp if right_view == 0 else min(n_disp, width - x)
-            best = 0
-            best_cost = volume[y, x, 0]
-            for d in range(1, last):
-                c = volume[y, x + d * right_view, d]
-                if c < best_cost:
-                    best_cost = c
-                    best = d
-            out[y, x] = best
+            out[y, x] = _argmin(volume[y, x], n_disp)
 
 
 @njit(**KERNEL_OPTIONS)
 def winner_takes_all_both(volume, out_l, out_r):
     """:func:`winner_takes_all` of both views in one pass over the volume.
 
-    The right view's candidates of right pixel xr sit on a diagonal, (xr + d, d); reading
+    Right view: argmin_d volume[y, xr + d, d] over the d with xr + d inside the image; the
+    right view's candidates of right pixel xr sit on a diagonal, (xr + d, d); reading
     the volume in memory order instead, cost (x, d) is offered to right pixel x - d. Each
     right pixel sees its candidates in increasing d, so ties keep the smaller d there too.
     The updates are written as selects, without branches, so that they vectorise.
@@ -44,14 +46,7 @@ def winner_takes_all_both(volume, out_l, out_r):
         # Reversed: right pixel xr is at width - 1 - xr, so x - d lies forward in memory.
         for x in range(width):
             costs = volume[y, x]
-            best = 0
-            best_cost = costs[0]
-            for d in range(1, n_disp):
-                c = costs[d]
-                if c < best_cost:
-                    best_cost = c
-                    best = d
-            out_l[y, x] = best
+            out_l[y, x] = _argmin(costs, n_disp)
             # Views from x's place on: indexes that Numba knows are >= 0 stay affine.
             cost_r = best_r[width - 1 - x:]
             disp_r = best_rd[width - 1 - x:]

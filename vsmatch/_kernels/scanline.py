@@ -4,24 +4,6 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS
 
 
-@njit(**KERNEL_OPTIONS)
-def colour_change(image, threshold, along_rows, out):
-    """out[y, x] = 1 where the largest channel difference between (y, x) and its
-    predecessor along the axis is ``threshold`` or more, and where there is none."""
-    height, width, channels = image.shape
-    for y in prange(height):
-        for x in range(width):
-            if (x == 0) if along_rows else (y == 0):
-                out[y, x] = 1
-                continue
-            py = y - 1 + along_rows
-            px = x - along_rows
-            largest = 0
-            for k in range(channels):
-                largest = max(largest, abs(np.int32(image[y, x, k]) - np.int32(image[py, px, k])))
-            out[y, x] = largest >= threshold
-
-
 @njit(inline="always")
 def _first_step(src, dst, cur, weight, n_disp):
     """The path starts: its cost is the matching cost. Returns its minimum over d."""
