@@ -171,7 +171,7 @@ def run_benchmark(data_root=None, config: str | None = None, repeats: int = 5,
     scenes = datasets.load_dataset("middlebury2", data_root)
     folder = datasets.dataset_folder("middlebury2", data_root) / "cones"
     left, right = folder / "imL.png", folder / "imR.png"
-    cones_disp = datasets.MIDDLEBURY2_SCENES["cones"][1]
+    cones_disp = datasets.middlebury2.SCENES["cones"][1]
     report: dict[str, Any] = {
         "config": config or "default",
         "threads": {"numba": numba.get_num_threads(), "opencv": cv2.getNumThreads()},

@@ -77,11 +77,44 @@ def write_atomic(path: str | Path, encode) -> None:
     os.close(fd)
     try:
         encode(tmp)
+        # mkstemp makes the file private (0600); give it the mode any new file gets.
+        os.chmod(tmp, 0o666 & ~current_umask())
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def current_umask() -> int:
+    """The process's umask (reading it means setting it; it is set straight back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def check_distinct_paths(inputs, outputs) -> None:
+    """Refuse an output that names an input, or two outputs that name the same file.
+
+    Paths are compared after resolving links and ``..``, and by identity on disk where
+    both exist (hard links); ``None`` entries are ignored. Raises ValueError.
+    """
+    inputs = [Path(p) for p in inputs if p is not None]
+    outputs = [Path(p) for p in outputs if p is not None]
+    for k, out in enumerate(outputs):
+        for other in inputs + outputs[:k]:
+            if _same_file(out, other):
+                role = "input" if other in inputs else "output"
+                raise ValueError(f"{out}: the output would overwrite the {role} {other}")
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    if a.resolve() == b.resolve():
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
 
 
 def write_text_atomic(path: str | Path, text: str) -> None:
@@ -124,15 +157,59 @@ def write_disparity(path: str | Path, disp: np.ndarray) -> None:
                          f"(use {' or '.join(DISPARITY_FORMATS)})")
 
 
+def write_depth(path: str | Path, depth: np.ndarray) -> None:
+    """Depth as float32 PFM (``inf`` where unknown), the baseline's unit."""
+    if Path(path).suffix.lower() != ".pfm":
+        raise ValueError(f"{path}: depth is written as .pfm (float32)")
+    imwrite_atomic(path, np.ascontiguousarray(depth, dtype=np.float32))
+
+
+def write_point_cloud(path: str | Path, vertices: np.ndarray) -> None:
+    """A binary little-endian PLY of ``vertices`` (see ``geometry.ply_vertices``)."""
+    from plyfile import PlyData, PlyElement
+
+    ply = PlyData([PlyElement.describe(vertices, "vertex")], text=False, byte_order="<")
+    write_atomic(path, lambda tmp: ply.write(tmp))
+
+
+def read_pfm(path: str | Path) -> np.ndarray:
+    """A PFM image as float32, (H, W) or (H, W, 3), top row first.
+
+    The scale's sign gives the byte order; its magnitude is not applied (some writers
+    store an arbitrary one there, which OpenCV's reader would multiply in).
+    """
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            kind = fh.readline().strip()
+            dims = fh.readline().split()
+            scale = float(fh.readline())
+            data = fh.read()
+        if kind not in (b"Pf", b"PF") or len(dims) != 2:
+            raise ValueError("bad header")
+        width, height = int(dims[0]), int(dims[1])
+    except FileNotFoundError:
+        raise ImageError(f"{path}: file not found") from None
+    except (OSError, ValueError, IndexError):
+        raise ImageError(f"{path}: not a PFM file") from None
+    channels = 3 if kind == b"PF" else 1
+    count = width * height * channels
+    if len(data) < 4 * count:
+        raise ImageError(f"{path}: truncated PFM")
+    values = np.frombuffer(data, dtype="<f4" if scale < 0 else ">f4", count=count)
+    image = values.reshape((height, width, channels) if channels == 3 else (height, width))
+    return np.ascontiguousarray(image[::-1], dtype=np.float32)
+
+
 def read_disparity(path: str | Path) -> np.ndarray:
     """Read a disparity map written by :func:`write_disparity` (float32, inf = invalid)."""
     path = Path(path)
+    if path.suffix.lower() == ".pfm":
+        return read_pfm(path)
     image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     if image is None:
         raise ImageError(f"{path}: not a readable disparity map")
-    if path.suffix.lower() == ".png":
-        return png16_to_disparity(image)
-    return image.astype(np.float32)
+    return png16_to_disparity(image)
 
 
 def colour_disparity(disp: np.ndarray, max_disp: float) -> np.ndarray:

@@ -10,6 +10,7 @@ import numpy as np
 
 from . import aggregation, cost, disparity, noise, optimization, refinement, sensitivity
 from .config import Config, load_config
+from .disparity import INVALID_DISPARITY
 from .images import to_grey
 
 
@@ -24,7 +25,8 @@ class MatchResult:
     noise_sigma: float | None = None  # estimated, when noise.adapt is on
 
 
-def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config) -> None:
+def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
+               min_disp: int = 0) -> None:
     """Refuse inputs the method cannot run on, with a message naming the problem."""
     for name, image in (("left", left), ("right", right)):
         if not isinstance(image, np.ndarray) or image.ndim not in (2, 3) or (
@@ -40,14 +42,22 @@ def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config) 
     if width < cfg.cost.census_width or height < cfg.cost.census_height:
         raise ValueError(f"images of {width}x{height} are smaller than the census window "
                          f"{cfg.cost.census_width}x{cfg.cost.census_height}")
-    if isinstance(max_disp, bool) or not isinstance(max_disp, (int, np.integer)):
-        raise ValueError(f"max_disp must be an integer, got {max_disp!r}")
-    if not 0 < max_disp < width:
+    for name, value in (("max_disp", max_disp), ("min_disp", min_disp)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+            raise ValueError(f"{name} must be an integer, got {value!r}")
+    if min_disp == 0 and not 0 < max_disp < width:
         raise ValueError(f"max_disp = {max_disp} must be between 1 and the image width "
                          f"minus one ({width - 1})")
+    if max_disp <= min_disp:
+        raise ValueError(f"max_disp = {max_disp} must be larger than min_disp = {min_disp}")
+    # With an offset the views are cropped by |min_disp| columns (see run()).
+    cropped = width - abs(min_disp)
+    if max_disp - min_disp >= cropped or cropped < cfg.cost.census_width:
+        raise ValueError(f"the range {min_disp}..{max_disp} is too wide for images "
+                         f"{width} pixels wide")
 
 
-def match(left: np.ndarray, right: np.ndarray, *, max_disp: int,
+def match(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0,
           config: Config | str | None = None) -> np.ndarray:
     """Left-view disparity of a rectified stereo pair.
 
@@ -56,7 +66,11 @@ def match(left: np.ndarray, right: np.ndarray, *, max_disp: int,
     left, right : ndarray, (H, W, 3) uint8 in BGR order (as ``cv2.imread`` gives), or (H, W)
         uint8 grey. Both the same size.
     max_disp : int
-        The largest disparity searched; disparities ``0 .. max_disp`` are considered.
+        The largest disparity searched; disparities ``min_disp .. max_disp`` are considered.
+    min_disp : int, optional
+        The smallest disparity searched (default 0; may be negative). As with OpenCV's
+        ``minDisparity``, left pixels with no candidate in the range are invalid: the
+        first ``min_disp`` columns when it is positive, the last ``-min_disp`` when negative.
     config : Config, bundled config name or YAML path, optional
         The method's parameters; ``None`` uses the bundled ``default``.
 
@@ -66,14 +80,38 @@ def match(left: np.ndarray, right: np.ndarray, *, max_disp: int,
         Disparity in pixels, left view. A pixel without an estimate holds
         :data:`vsmatch.INVALID_DISPARITY` (``inf``).
     """
-    return run(left, right, max_disp=max_disp, config=config).disparity
+    return run(left, right, max_disp=max_disp, min_disp=min_disp, config=config).disparity
 
 
-def run(left: np.ndarray, right: np.ndarray, *, max_disp: int,
+def run(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0,
         config: Config | str | None = None) -> MatchResult:
     """:func:`match` with per-stage timings and the left-right labels."""
     cfg = load_config(config)
-    check_pair(left, right, max_disp, cfg)
+    check_pair(left, right, max_disp, cfg, min_disp)
+    if min_disp == 0:
+        return _run_from_zero(left, right, max_disp, cfg)
+    # Disparities m .. max of the whole views are 0 .. max - m of views cropped by |m|
+    # columns: with m > 0 the left view loses its first m columns (they have no right
+    # pixel at any d >= m) and the right view its last m; with m < 0 the other way round.
+    # Every stage then runs unchanged, and the offset is added back at the end.
+    width = left.shape[1]
+    keep = slice(min_disp, None) if min_disp > 0 else slice(None, width + min_disp)
+    other = slice(None, width - min_disp) if min_disp > 0 else slice(-min_disp, None)
+    result = _run_from_zero(np.ascontiguousarray(left[:, keep]),
+                            np.ascontiguousarray(right[:, other]), max_disp - min_disp, cfg)
+    disp = np.full(left.shape[:2], INVALID_DISPARITY, dtype=np.float32)
+    disp[:, keep] = result.disparity + np.float32(min_disp)
+    result.disparity = disp
+    if result.labels is not None:
+        labels = np.full(left.shape[:2], disparity.OCCLUDED, dtype=np.uint8)
+        labels[:, keep] = result.labels
+        result.labels = labels
+    return result
+
+
+def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
+                   cfg: Config) -> MatchResult:
+    """The stages in order, for disparities ``0 .. max_disp``."""
     n_disp = int(max_disp) + 1
     seconds: dict[str, float] = {}
 

@@ -1,0 +1,149 @@
+"""Calibration files, depth and point clouds from a left-view disparity.
+
+The camera model is the rectified pair's: depth ``Z = f B / (d + doffs)`` in the
+baseline's unit, and a pixel (x, y) of the left view at depth Z is the point
+``((x - cx) Z / f, (y - cy) Z / fy, Z)`` in the left camera's frame (x right, y down,
+z forward), as OpenCV's ``reprojectImageTo3D`` gives.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+
+class CalibrationError(ValueError):
+    """A calibration that cannot be read or used; the message is one line."""
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """What depth and 3D points need from a rectified stereo pair's calibration."""
+
+    focal: float  # f, pixels (horizontal)
+    baseline: float  # B, in the unit depth comes out in (Middlebury mm, KITTI m)
+    cx: float | None = None  # principal point of the left view; None: the image centre
+    cy: float | None = None
+    doffs: float = 0.0  # x-difference of the principal points (right minus left), pixels
+    focal_y: float | None = None  # fy, when it differs from f
+    ndisp: int | None = None  # Middlebury's search range 0 .. ndisp - 1, when given
+
+    def __post_init__(self):
+        if not (np.isfinite(self.focal) and self.focal > 0):
+            raise CalibrationError(f"focal length must be positive, got {self.focal}")
+        if not (np.isfinite(self.baseline) and self.baseline > 0):
+            raise CalibrationError(f"baseline must be positive, got {self.baseline}")
+
+    def principal_point(self, shape: tuple[int, ...]) -> tuple[float, float]:
+        height, width = shape[:2]
+        return (self.cx if self.cx is not None else (width - 1) / 2.0,
+                self.cy if self.cy is not None else (height - 1) / 2.0)
+
+
+def read_calibration(path: str | Path) -> Calibration:
+    """A Middlebury 2014 ``calib.txt`` or a KITTI ``calib_cam_to_cam.txt``.
+
+    Middlebury: ``f``, ``cx``, ``cy`` from ``cam0``, ``doffs``, ``baseline`` (mm),
+    ``ndisp``. KITTI: ``f``, ``cx``, ``cy`` from ``P_rect_02``, the baseline (m) from
+    the x-translations of ``P_rect_02`` and ``P_rect_03``, ``doffs`` from their cx.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise CalibrationError(f"{path}: file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CalibrationError(f"{path}: cannot read the calibration ({exc})") from None
+    fields = {}
+    for line in text.splitlines():
+        key, sep, value = line.partition("=") if "=" in line else line.partition(":")
+        if sep:
+            fields[key.strip()] = value.strip()
+    try:
+        if "cam0" in fields:
+            return _middlebury(fields)
+        if "P_rect_02" in fields and "P_rect_03" in fields:
+            return _kitti(fields)
+    except (KeyError, ValueError) as exc:
+        raise CalibrationError(f"{path}: malformed calibration ({_describe(exc)})") from None
+    raise CalibrationError(f"{path}: not a Middlebury calib.txt (cam0=...) or a KITTI "
+                           "calib_cam_to_cam.txt (P_rect_02, P_rect_03)")
+
+
+def _describe(exc: Exception) -> str:
+    return f"missing {exc}" if isinstance(exc, KeyError) else str(exc)
+
+
+def _numbers(text: str) -> np.ndarray:
+    values = [v for v in re.split(r"[\s;,\[\]]+", text) if v]
+    return np.array([float(v) for v in values], dtype=np.float64)
+
+
+def _middlebury(fields: dict[str, str]) -> Calibration:
+    cam0 = _numbers(fields["cam0"])
+    if cam0.size != 9:
+        raise ValueError("cam0 must be a 3x3 matrix")
+    ndisp = int(fields["ndisp"]) if "ndisp" in fields else None
+    return Calibration(focal=cam0[0], baseline=float(fields["baseline"]), cx=cam0[2],
+                       cy=cam0[5], doffs=float(fields.get("doffs", 0.0)), focal_y=cam0[4],
+                       ndisp=ndisp)
+
+
+def _kitti(fields: dict[str, str]) -> Calibration:
+    p2, p3 = _numbers(fields["P_rect_02"]), _numbers(fields["P_rect_03"])
+    if p2.size != 12 or p3.size != 12:
+        raise ValueError("P_rect_02 and P_rect_03 must be 3x4 matrices")
+    focal = p2[0]
+    # P = K [I | t]: P[0, 3] = f t_x; the right camera sits at +B along x.
+    baseline = (p2[3] - p3[3]) / focal
+    return Calibration(focal=focal, baseline=baseline, cx=p2[2], cy=p2[6],
+                       doffs=p3[2] - p2[2], focal_y=p2[5])
+
+
+def depth_from_disparity(disp: np.ndarray, calib: Calibration) -> np.ndarray:
+    """Depth ``f B / (d + doffs)`` (float32, the baseline's unit); ``inf`` where the
+    disparity is invalid or ``d + doffs <= 0`` (a point at or beyond infinity)."""
+    disp = np.asarray(disp, dtype=np.float64)
+    denominator = disp + calib.doffs
+    depth = np.full(disp.shape, np.inf, dtype=np.float32)
+    ok = np.isfinite(denominator) & (denominator > 0)
+    depth[ok] = (calib.focal * calib.baseline / denominator[ok]).astype(np.float32)
+    return depth
+
+
+def point_cloud(disp: np.ndarray, image: np.ndarray, calib: Calibration, *,
+                max_depth: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The 3D points of the valid pixels, in the left camera's frame, and their colours.
+
+    Returns ``points`` (N, 3) float32 (x right, y down, z forward, the baseline's unit)
+    and ``colours`` (N, 3) uint8 in RGB order, row by row. ``image`` is the left view,
+    BGR or grey. With ``max_depth``, points farther than it are left out.
+    """
+    depth = depth_from_disparity(disp, calib)
+    keep = np.isfinite(depth)
+    if max_depth is not None:
+        keep &= depth <= max_depth
+    ys, xs = np.nonzero(keep)
+    z = depth[ys, xs].astype(np.float64)
+    cx, cy = calib.principal_point(disp.shape)
+    focal_y = calib.focal_y or calib.focal
+    points = np.stack([(xs - cx) * z / calib.focal, (ys - cy) * z / focal_y, z],
+                      axis=1).astype(np.float32)
+    pixels = image[ys, xs]
+    colours = (np.repeat(pixels[:, None], 3, axis=1) if image.ndim == 2
+               else pixels[:, ::-1]).astype(np.uint8)
+    return points, np.ascontiguousarray(colours)
+
+
+def ply_vertices(points: np.ndarray, colours: np.ndarray) -> np.ndarray:
+    """The PLY vertex records: float32 x, y, z and uchar red, green, blue."""
+    vertex = np.empty(len(points), dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"),
+                                          ("red", "u1"), ("green", "u1"), ("blue", "u1")])
+    for k, axis in enumerate("xyz"):
+        vertex[axis] = points[:, k]
+    for k, channel in enumerate(("red", "green", "blue")):
+        vertex[channel] = colours[:, k]
+    return vertex

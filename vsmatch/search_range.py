@@ -1,0 +1,149 @@
+"""The disparity search range found from the pair itself (``--max-disp auto``).
+
+Two estimates of the largest disparity, each robust where the other is weak:
+
+- sparse: SIFT matches between the views (OpenCV), kept when they pass the ratio test,
+  lie on the same row (the pair is rectified) and agree with their neighbouring matches;
+  their 99.5th percentile. Exposure changes do not fool it, but it misses near objects
+  without corners;
+- dense: vsmatch itself on the pair reduced to about 200 columns, searching half the
+  width, the 99th percentile of the pixels that pass the left-right check. It sees
+  near surfaces without corners, but can lock onto wrong matches under lighting changes,
+  so it may only raise the sparse estimate by :data:`DENSE_MAX_GAIN` at most.
+
+The larger estimate, times :data:`MARGIN_FACTOR` plus :data:`MARGIN_PIXELS`, is the
+range's top (rounded up), and 0 its bottom. The constants were set on the 24 scenes of
+middlebury2, middlebury-third, middlebury2014-quarter and kitti2015 together so that the
+range covers every scene's non-occluded ground truth (``python scripts/disparity_range.py``
+prints the table).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+#: Features are found on the pair reduced to at most this many columns.
+FEATURE_WIDTH = 1280
+#: Lowe's ratio test, and the strongest features kept per view.
+RATIO = 0.75
+MAX_FEATURES = 4000
+#: A match is kept when it is this close (pixels, or share) to the median disparity of
+#: its 8 nearest matches in the image.
+NEIGHBOURS = 8
+AGREE_PIXELS, AGREE_SHARE = 2.0, 0.1
+SPARSE_PERCENTILE = 99.5
+#: The dense check runs at about this many columns.
+DENSE_WIDTH = 200
+DENSE_PERCENTILE = 99.0
+DENSE_MIN_VALID = 0.1  # share of pixels passing the left-right check, else ignored
+DENSE_MAX_GAIN = 1.5
+MARGIN_FACTOR = 1.3
+MARGIN_PIXELS = 8
+#: Fewer consistent matches than this, and no dense estimate: no range can be given.
+MIN_MATCHES = 10
+
+
+class RangeError(ValueError):
+    """No disparity range could be estimated; the message asks for --max-disp."""
+
+
+@dataclass(frozen=True)
+class DisparityRange:
+    min_disp: int
+    max_disp: int
+    sparse: float | None  # the sparse estimate (pixels), None without enough matches
+    dense: float | None  # the dense estimate, None when it was not usable
+    matches: int  # consistent feature matches
+
+    def describe(self) -> str:
+        parts = [f"disparity range {self.min_disp}..{self.max_disp}"]
+        if self.sparse is not None:
+            parts.append(f"{self.matches} feature matches, {SPARSE_PERCENTILE:g}th "
+                         f"percentile {self.sparse:.1f}")
+        if self.dense is not None:
+            parts.append(f"dense check {self.dense:.1f}")
+        return "; ".join(parts)
+
+
+def estimate_disparity_range(left: np.ndarray, right: np.ndarray) -> DisparityRange:
+    """The search range ``0 .. max`` for a rectified pair (BGR or grey uint8 views)."""
+    width = left.shape[1]
+    disparities = sparse_disparities(left, right)
+    sparse = (float(np.percentile(disparities, SPARSE_PERCENTILE))
+              if disparities.size >= MIN_MATCHES else None)
+    dense = dense_estimate(left, right)
+    if sparse is None and dense is None:
+        raise RangeError(f"could not estimate the disparity range ({disparities.size} "
+                         "consistent feature matches, no dense estimate); give --max-disp")
+    if sparse is None:
+        top = dense
+    elif dense is None:
+        top = sparse
+    else:
+        top = max(sparse, min(dense, DENSE_MAX_GAIN * sparse))
+    max_disp = math.ceil(MARGIN_FACTOR * max(top, 0.0) + MARGIN_PIXELS)
+    max_disp = int(min(max_disp, width - 2))
+    return DisparityRange(0, max_disp, sparse, dense, int(disparities.size))
+
+
+def _grey(image: np.ndarray) -> np.ndarray:
+    return image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+
+
+def _reduced(image: np.ndarray, factor: int) -> np.ndarray:
+    if factor == 1:
+        return image
+    height, width = image.shape[:2]
+    return cv2.resize(image, (width // factor, height // factor),
+                      interpolation=cv2.INTER_AREA)
+
+
+def sparse_disparities(left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """Disparities ``x_left - x_right`` of the consistent feature matches (float64)."""
+    factor = max(1, math.ceil(left.shape[1] / FEATURE_WIDTH))
+    grey_l, grey_r = (_reduced(_grey(v), factor) for v in (left, right))
+    sift = cv2.SIFT_create(nfeatures=MAX_FEATURES, contrastThreshold=0.02)
+    keys_l, desc_l = sift.detectAndCompute(grey_l, None)
+    keys_r, desc_r = sift.detectAndCompute(grey_r, None)
+    if desc_l is None or desc_r is None or len(keys_r) < 2:
+        return np.empty(0)
+    row_tolerance = max(1.5, grey_l.shape[0] / 300)
+    points = []
+    for pair in cv2.BFMatcher(cv2.NORM_L2).knnMatch(desc_l, desc_r, k=2):
+        if len(pair) == 2 and pair[0].distance < RATIO * pair[1].distance:
+            (xl, yl), (xr, yr) = keys_l[pair[0].queryIdx].pt, keys_r[pair[0].trainIdx].pt
+            if abs(yl - yr) <= row_tolerance:
+                points.append((xl, yl, xl - xr))
+    if len(points) <= NEIGHBOURS:
+        return np.empty(0)
+    points = np.array(points, dtype=np.float32)
+    # Each match against the median of its nearest matches: a wrong match rarely has
+    # neighbours that agree with it.
+    near = cv2.BFMatcher(cv2.NORM_L2).knnMatch(points[:, :2], points[:, :2],
+                                               k=NEIGHBOURS + 1)
+    neighbours = np.array([[m.trainIdx for m in row[1:]] for row in near])
+    disp = points[:, 2].astype(np.float64)
+    median = np.median(disp[neighbours], axis=1)
+    agree = np.abs(disp - median) <= np.maximum(AGREE_PIXELS, AGREE_SHARE * np.abs(median))
+    return disp[agree] * factor
+
+
+def dense_estimate(left: np.ndarray, right: np.ndarray) -> float | None:
+    """The high percentile of a wide, coarse vsmatch run's checked disparities, or None."""
+    from .disparity import VALID
+    from .pipeline import run
+
+    factor = max(1, round(left.shape[1] / DENSE_WIDTH))
+    small_l, small_r = _reduced(left, factor), _reduced(right, factor)
+    try:
+        result = run(small_l, small_r, max_disp=small_l.shape[1] // 2)
+    except ValueError:  # too small to match at this size
+        return None
+    valid = result.labels == VALID
+    if valid.mean() < DENSE_MIN_VALID:
+        return None
+    return float(np.percentile(result.disparity[valid], DENSE_PERCENTILE)) * factor
