@@ -12,6 +12,7 @@ from pathlib import Path
 
 from . import io, pipeline
 from .config import Config
+from .search_range import estimate_disparity_range
 
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
 
@@ -31,12 +32,13 @@ class PairJob:
     left: Path
     right: Path
     output: Path
-    max_disp: int
+    max_disp: int | None  # None: estimated from the pair
 
 
-def read_pair_list(csv_path: str | Path, default_max_disp: int) -> list[PairJob]:
+def read_pair_list(csv_path: str | Path, default_max_disp: int | None) -> list[PairJob]:
     """Rows ``left,right,output[,max_disp]``; relative paths are relative to the CSV's
-    folder. A first row starting with ``left`` is a header; blank rows are skipped."""
+    folder. A first row starting with ``left`` is a header; blank rows are skipped.
+    ``max_disp`` may be ``auto``; an empty one takes ``default_max_disp``."""
     csv_path = Path(csv_path)
     base = csv_path.parent
     jobs = []
@@ -53,14 +55,22 @@ def read_pair_list(csv_path: str | Path, default_max_disp: int) -> list[PairJob]
             raise BatchError(f"{csv_path}, line {number}: expected left,right,output[,max_disp]")
         max_disp = default_max_disp
         if len(row) == 4 and row[3]:
-            try:
-                max_disp = int(row[3])
-            except ValueError:
-                raise BatchError(f"{csv_path}, line {number}: max_disp '{row[3]}' is not a "
-                                 "whole number") from None
+            max_disp = _max_disp_cell(row[3], f"{csv_path}, line {number}")
         left, right, output = (base / cell for cell in row[:3])
         jobs.append(PairJob(left, right, output, max_disp))
     return jobs
+
+
+def _max_disp_cell(text: str, where: str) -> int | None:
+    if text.lower() == "auto":
+        return None
+    try:
+        value = int(text)
+    except ValueError:
+        raise BatchError(f"{where}: max_disp '{text}' is not a whole number or 'auto'") from None
+    if value <= 0:
+        raise BatchError(f"{where}: max_disp {value} must be at least 1")
+    return value
 
 
 def _image_with_stem(folder: Path, stem: str) -> Path | None:
@@ -71,7 +81,7 @@ def _image_with_stem(folder: Path, stem: str) -> Path | None:
     return None
 
 
-def find_pairs(folder: str | Path, out_dir: str | Path, *, max_disp: int,
+def find_pairs(folder: str | Path, out_dir: str | Path, *, max_disp: int | None,
                suffix: str = ".pfm") -> list[PairJob]:
     """The pairs in ``folder``: each sub-folder holding a pair named as in
     :data:`PAIR_NAMES`, and files named ``NAME_left`` / ``NAME_right`` (or ``_L`` / ``_R``).
@@ -98,12 +108,16 @@ def find_pairs(folder: str | Path, out_dir: str | Path, *, max_disp: int,
 
 def match_pair(job: PairJob, config: Config) -> None:
     """Read, match and write one pair; raises with a one-line message on failure."""
+    io.check_distinct_paths([job.left, job.right], [job.output])
     left, right = io.read_pair(job.left, job.right)
+    max_disp = job.max_disp
     try:
-        pipeline.check_pair(left, right, job.max_disp, config)
+        if max_disp is None:
+            max_disp = estimate_disparity_range(left, right).max_disp
+        pipeline.check_pair(left, right, max_disp, config)
     except ValueError as exc:
         raise ValueError(f"{job.left}: {exc}") from None
-    disp = pipeline.match(left, right, max_disp=job.max_disp, config=config)
+    disp = pipeline.match(left, right, max_disp=max_disp, config=config)
     io.write_disparity(job.output, disp)
 
 

@@ -23,19 +23,11 @@ from typing import Any
 import cv2
 
 from . import datasets, pipeline
+from .peers import sgbm_matcher
 from .config import load_config
 
 SCALING_FACTOR = 3
 SCALING_LEVELS = 180
-
-
-def sgbm_matcher(max_disp: int, channels: int = 3) -> cv2.StereoSGBM:
-    """OpenCV StereoSGBM, mode HH, block size 3, covering disparities 0 .. max_disp."""
-    levels = (max_disp + 1 + 15) // 16 * 16  # SGBM wants a multiple of 16
-    block = 3
-    return cv2.StereoSGBM_create(minDisparity=0, numDisparities=levels, blockSize=block,
-                                 P1=8 * channels * block ** 2, P2=32 * channels * block ** 2,
-                                 mode=cv2.STEREO_SGBM_MODE_HH)
 
 
 def time_pairs(scenes, config, repeats: int) -> dict[str, Any]:

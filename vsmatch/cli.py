@@ -16,11 +16,9 @@ from pathlib import Path
 
 import click
 
-from . import __version__, batch, datasets, evaluation, io, pipeline, synthetic
+from . import __version__, batch, datasets, evaluation, geometry, io, pipeline, synthetic
 from .config import ConfigError, bundled_config_names, load_config
-
-#: ``--max-disp`` when none is given.
-DEFAULT_MAX_DISP = 64
+from .peers import PEER_METHODS
 
 EXPECTED_ERRORS = (ConfigError, io.ImageError, datasets.DatasetError, batch.BatchError,
                    ValueError, OSError)
@@ -73,6 +71,28 @@ def data_root_option(func):
         "--data-root", type=click.Path(file_okay=False), default=None,
         help="Folder holding middlebury2/ (and middlebury-2005-2006-third/). Default: "
              "$VSMATCH_DATA, else ./data, else ../shared/data.")(func)
+
+
+class MaxDisparity(click.ParamType):
+    """``--max-disp``: a whole number of pixels, or ``auto`` (None)."""
+
+    name = "N|auto"
+
+    def convert(self, value, param, ctx):
+        if value is None or isinstance(value, int):
+            return value
+        if str(value).strip().lower() == "auto":
+            return None
+        try:
+            number = int(value)
+        except ValueError:
+            self.fail(f"'{value}' is neither a whole number nor 'auto'", param, ctx)
+        if number <= 0:
+            self.fail(f"{number} must be at least 1", param, ctx)
+        return number
+
+
+MAX_DISP = MaxDisparity()
 
 
 class OneLineErrors(click.Group):
@@ -130,9 +150,7 @@ def _check_output_path(path: Path) -> None:
     if suffix not in io.DISPARITY_FORMATS:
         raise click.BadParameter(f"'{path}' must end in .pfm (float32) or .png (16-bit)",
                                  param_hint="'-o'")
-    folder = _check_output_folder(path)
-    if not _writable(folder):
-        raise click.ClickException(f"{path}: output folder '{folder}' is not writable")
+    _check_output_path_folder(path)
 
 
 def _writable(folder: Path) -> bool:
@@ -145,37 +163,117 @@ def _writable(folder: Path) -> bool:
 @click.option("-o", "--output", type=click.Path(), required=True,
               help="Disparity map to write: .pfm (float32, Middlebury; inf = invalid) or "
                    ".png (16-bit, value = round(256 d), 0 = invalid).")
-@click.option("--max-disp", type=int, default=DEFAULT_MAX_DISP, show_default=True,
-              help="Largest disparity searched (0 .. N). Choose it at least the disparity "
-                   "of the nearest object, in pixels; larger costs time and can add errors.")
+@click.option("--max-disp", type=MAX_DISP, default=None,
+              help="Largest disparity searched, or 'auto' to estimate it from the pair. "
+                   "Default: the calibration's ndisp - 1, else auto.")
+@click.option("--min-disp", type=int, default=0, show_default=True,
+              help="Smallest disparity searched (may be negative); left pixels with no "
+                   "candidate in the range are invalid, as with OpenCV's minDisparity.")
+@click.option("--calib", type=click.Path(dir_okay=False), default=None,
+              help="Calibration: a Middlebury 2014 calib.txt or a KITTI "
+                   "calib_cam_to_cam.txt (for --depth and --cloud, and the range).")
+@click.option("--focal", type=float, default=None, help="Focal length in pixels "
+              "(instead of --calib; with --baseline).")
+@click.option("--baseline", type=float, default=None,
+              help="Baseline, in the unit depth should come out in.")
+@click.option("--cx", type=float, default=None, help="Principal point x (default: centre).")
+@click.option("--cy", type=float, default=None, help="Principal point y (default: centre).")
+@click.option("--doffs", type=float, default=None,
+              help="x-difference of the principal points, right minus left (default 0).")
+@click.option("--depth", "depth_path", type=click.Path(dir_okay=False), default=None,
+              help="Also write depth f*B/(d + doffs) here (.pfm, inf = unknown).")
+@click.option("--cloud", "cloud_path", type=click.Path(dir_okay=False), default=None,
+              help="Also write the coloured point cloud here (.ply, binary).")
+@click.option("--max-depth", type=click.FloatRange(min=0, min_open=True), default=None,
+              help="Leave points farther than this out of the cloud.")
 @config_option
 @click.pass_context
 @friendly_errors
-def run(ctx, left, right, output, max_disp, config):
+def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx, cy,
+        doffs, depth_path, cloud_path, max_depth, config):
     """Compute the left-view disparity of a rectified stereo pair.
 
     \b
     Example:
       vsmatch run imL.png imR.png -o disp.pfm --max-disp 59
+      vsmatch run im0.png im1.png -o disp.pfm --calib calib.txt --cloud scene.ply
     """
     out = Path(output)
     _check_output_path(out)
+    if depth_path is not None and Path(depth_path).suffix.lower() != ".pfm":
+        raise click.BadParameter(f"'{depth_path}' must end in .pfm", param_hint="'--depth'")
+    if cloud_path is not None and Path(cloud_path).suffix.lower() != ".ply":
+        raise click.BadParameter(f"'{cloud_path}' must end in .ply", param_hint="'--cloud'")
+    for extra in (depth_path, cloud_path):
+        if extra is not None:
+            _check_output_path_folder(Path(extra))
+    io.check_distinct_paths([left, right, calib], [output, depth_path, cloud_path])
+    camera = _calibration(calib, focal, baseline, cx, cy, doffs)
+    if (depth_path or cloud_path) and camera is None:
+        raise click.UsageError("--depth and --cloud need --calib, or --focal and --baseline")
     cfg = load_config(config)
-    if max_disp <= 0:
-        raise click.BadParameter(f"{max_disp} must be at least 1", param_hint="'--max-disp'")
     left_image, right_image = io.read_pair(left, right)
     width = left_image.shape[1]
-    if max_disp >= width:
+    if max_disp is None and camera is not None and camera.ndisp is not None:
+        max_disp = min_disp + camera.ndisp - 1
+    if max_disp is None:
+        found = _estimate_range(left_image, right_image, left)
+        _verbose(ctx, f"{left}: {found.describe()}")
+        max_disp = max(found.max_disp, min_disp + 1)
+    elif max_disp >= width:
         raise click.BadParameter(f"{max_disp} must be less than the image width ({width})",
                                  param_hint="'--max-disp'")
     try:
-        pipeline.check_pair(left_image, right_image, max_disp, cfg)
+        pipeline.check_pair(left_image, right_image, max_disp, cfg, min_disp)
     except ValueError as exc:
         raise click.ClickException(f"{left}: {exc}") from None
-    result = pipeline.run(left_image, right_image, max_disp=max_disp, config=cfg)
+    _verbose(ctx, f"searching disparities {min_disp}..{max_disp}")
+    result = pipeline.run(left_image, right_image, max_disp=max_disp, min_disp=min_disp,
+                          config=cfg)
     io.write_disparity(out, result.disparity)
+    if depth_path is not None:
+        io.write_depth(depth_path, geometry.depth_from_disparity(result.disparity, camera))
+    if cloud_path is not None:
+        points, colours = geometry.point_cloud(result.disparity, left_image, camera,
+                                               max_depth=max_depth)
+        io.write_point_cloud(cloud_path, geometry.ply_vertices(points, colours))
+        _verbose(ctx, f"{len(points)} points in the cloud")
     _report_run(ctx, result)
-    _echo(ctx, f"wrote {out}")
+    for path in (out, depth_path, cloud_path):
+        if path is not None:
+            _echo(ctx, f"wrote {path}")
+
+
+def _check_output_path_folder(path: Path) -> None:
+    folder = _check_output_folder(path)
+    if not _writable(folder):
+        raise click.ClickException(f"{path}: output folder '{folder}' is not writable")
+
+
+def _calibration(calib, focal, baseline, cx, cy, doffs) -> geometry.Calibration | None:
+    """The camera from --calib, or from --focal and --baseline, or None."""
+    by_hand = {"--focal": focal, "--baseline": baseline, "--cx": cx, "--cy": cy,
+               "--doffs": doffs}
+    given = [k for k, v in by_hand.items() if v is not None]
+    if calib is not None:
+        if given:
+            raise click.UsageError(f"give --calib or {', '.join(given)}, not both")
+        return geometry.read_calibration(calib)
+    if not given:
+        return None
+    if focal is None or baseline is None:
+        raise click.UsageError("--focal and --baseline go together")
+    return geometry.Calibration(focal=focal, baseline=baseline, cx=cx, cy=cy,
+                                doffs=doffs or 0.0)
+
+
+def _estimate_range(left_image, right_image, name):
+    from .search_range import estimate_disparity_range
+
+    try:
+        return estimate_disparity_range(left_image, right_image)
+    except ValueError as exc:
+        raise click.ClickException(f"{name}: {exc}") from None
 
 
 def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
@@ -190,18 +288,27 @@ def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
 
 
 @main.command("eval")
-@click.option("--dataset", type=click.Choice(sorted(datasets.DATASET_FOLDERS)),
+@click.option("--dataset", type=click.Choice(list(datasets.DATASETS)),
               default="middlebury2", show_default=True)
 @data_root_option
 @click.option("--method", "methods", multiple=True, metavar="NAME|PATH",
-              help="A bundled config name or a YAML path; repeat for several rows. "
+              help="A bundled config name, a YAML path, or a peer method "
+                   f"({', '.join(PEER_METHODS)}); repeat for several rows. "
                    "Default: census, paper and default.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help="Write the figures as JSON here.")
 @click.option("--out-dir", type=click.Path(file_okay=False), default=None,
               help="Save each disparity (PFM, colour PNG) and an error image here.")
-@click.option("--threshold", type=float, default=1.0, show_default=True,
-              help="A pixel is bad when its error exceeds this many pixels.")
+@click.option("--figure", "figure_path", type=click.Path(dir_okay=False), default=None,
+              help="Write a picture of the results here (.png): a row per scene; the "
+                   "left view, the ground truth, and each method's disparity and errors.")
+@click.option("--threshold", type=float, default=None,
+              help="Middlebury: a pixel is bad when its error exceeds this many pixels "
+                   "(default 1.0, and 2.0 for Middlebury 2014). KITTI's D1 is fixed.")
+@click.option("--max-disp", "range_mode", type=click.Choice(["official", "auto"]),
+              default="official", show_default=True,
+              help="Search each scene's official range, or the one estimated from the "
+                   "pair as 'vsmatch run' does without --max-disp.")
 @click.option("--ablation", is_flag=True,
               help="Instead of --method rows: the refinement chain of the config given by "
                    "--method (default: 'default') built up one stage at a time, and the "
@@ -213,13 +320,17 @@ def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
               help="Noise seeds per level; figures are the mean over them.")
 @click.pass_context
 @friendly_errors
-def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, threshold, ablation,
-                 noise, seeds):
-    """Score methods on a Middlebury dataset (bad pixels, nonocc / all / disc).
+def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, figure_path,
+                 threshold, range_mode, ablation, noise, seeds):
+    """Score methods on a benchmark with ground truth.
+
+    Middlebury: bad pixels (bad 1.0; bad 2.0 for Middlebury 2014) on nonocc and all
+    (and disc); KITTI: D1 (2015) or out-3 (2012). Every measure goes in --json.
 
     \b
     Example:
       vsmatch eval --dataset middlebury2 --method census --method paper --json t1.json
+      vsmatch eval --dataset middlebury2014-quarter --method default --method opencv-sgbm
     """
     from tqdm import tqdm
 
@@ -230,29 +341,50 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, threshold
         configs = evaluation.ablation_configs(load_config(methods[0] if methods else None))
     else:
         # Loading each config first fails before any work on a bad one.
-        configs = {m: load_config(m) for m in (methods or ("census", "paper", "default"))}
-    if json_path is not None:
-        _check_output_folder(Path(json_path))
+        configs = {m: m if m in PEER_METHODS else load_config(m)
+                   for m in (methods or ("census", "paper", "default"))}
+    for path in (json_path, figure_path):
+        if path is not None:
+            _check_output_folder(Path(path))
+    if figure_path is not None and Path(figure_path).suffix.lower() != ".png":
+        raise click.BadParameter(f"'{figure_path}' must end in .png", param_hint="'--figure'")
+    io.check_distinct_paths([], [json_path, figure_path])
+    try:
+        evaluation.scoring_for(dataset, threshold)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="'--threshold'") from None
     levels = _parse_levels(noise)
     scenes = datasets.load_dataset(dataset, data_root)
+    ranges = evaluation.scene_ranges(scenes, auto=range_mode == "auto")
+    if range_mode == "auto":
+        for scene in scenes:
+            _verbose(ctx, f"{scene.name}: disparity range {ranges[scene.name][0]}.."
+                          f"{ranges[scene.name][1]} (official {scene.min_disp}.."
+                          f"{scene.max_disp})")
     quiet = ctx.find_root().obj.get("quiet")
     runs = len(configs) * len(scenes) * (1 + len(levels) * seeds)
-    with tqdm(total=runs, disable=quiet, unit="run",
-              leave=False) as bar:
+    disparities = {} if figure_path is not None else None
+    with tqdm(total=runs, disable=quiet, unit="run", leave=False) as bar:
         def done(method: str, scene: str) -> None:
             bar.set_postfix_str(f"{method}/{scene}")
             bar.update(1)
-        report = evaluation.evaluate(scenes, configs, dataset=dataset,
-                                     threshold=threshold, out_dir=out_dir, on_done=done)
+        report = evaluation.evaluate(scenes, configs, dataset=dataset, threshold=threshold,
+                                     out_dir=out_dir, on_done=done, ranges=ranges,
+                                     disparities=disparities)
         if levels:
             evaluation.evaluate_noise(scenes, configs, report, levels=levels, seeds=seeds,
-                                      threshold=threshold, on_done=done)
+                                      threshold=report["threshold"], on_done=done)
     _echo(ctx, evaluation.format_tables(report))
     if levels:
         _echo(ctx, evaluation.format_noise_table(report))
     if json_path is not None:
         io.write_text_atomic(json_path, json.dumps(report, indent=2) + "\n")
         _echo(ctx, f"wrote {json_path}")
+    if figure_path is not None:
+        from .figure import results_figure
+
+        io.imwrite_atomic(figure_path, results_figure(scenes, report, disparities))
+        _echo(ctx, f"wrote {figure_path}")
 
 
 def _parse_levels(text: str | None) -> list[float]:
@@ -317,9 +449,9 @@ def bench_command(ctx, data_root, config, repeats, no_cold, no_scaling, json_pat
               "(created if missing). A CSV names each output itself.")
 @click.option("--format", "fmt", type=click.Choice(["pfm", "png"]), default="pfm",
               show_default=True, help="Output format for a folder SOURCE.")
-@click.option("--max-disp", type=click.IntRange(min=1), default=DEFAULT_MAX_DISP,
-              show_default=True, help="Largest disparity searched, for pairs that do not "
-              "give their own (CSV column 4).")
+@click.option("--max-disp", type=MAX_DISP, default="auto", show_default=True,
+              help="Largest disparity searched, for pairs that do not give their own "
+                   "(CSV column 4); 'auto' estimates it from each pair.")
 @config_option
 @click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
               help="Pairs matched at once, each in its own process.")
@@ -331,7 +463,7 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, overwrite):
 
     \b
     A CSV has rows left,right,output[,max_disp] (paths relative to the CSV's folder;
-    an optional header row starting with 'left'). A folder holds one sub-folder per
+    an optional header row starting with 'left'; max_disp a number or 'auto'). A folder holds one sub-folder per
     pair (imL/imR, im0/im1, view1/view5 or left/right images), or files NAME_left.png
     and NAME_right.png side by side; each disparity goes to OUT_DIR/NAME.pfm.
 
@@ -375,6 +507,63 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, overwrite):
         click.echo(f"failed: {job.left}: {error}", err=True)
     if failures:
         sys.exit(1)
+
+
+@main.group("datasets")
+def datasets_group():
+    """List the benchmarks vsmatch knows, and download them."""
+
+
+@datasets_group.command("list")
+@data_root_option
+@click.pass_context
+@friendly_errors
+def datasets_list(ctx, data_root):
+    """Show each known dataset, where it is looked for and whether it is there."""
+    roots = datasets.resolve_data_root(data_root)
+    _echo(ctx, "data root: " + ", ".join(str(r.resolve()) for r in roots)
+          + " (each dataset is read from the first of these that has it; --data-root or VSMATCH_DATA change them)")
+    for name, spec in datasets.DATASETS.items():
+        try:
+            folder = datasets.dataset_folder(name, data_root)
+            status = f"found in {folder}"
+        except datasets.DatasetError:
+            status = f"not found (expected {spec.folder}/ under the data root); get it: " \
+                     f"{spec.source}"
+        _echo(ctx, f"{name:<25}{status}")
+
+
+@datasets_group.command("download")
+@click.argument("dataset", type=click.Choice(["middlebury2014", "kitti2015", "kitti2012"]))
+@click.option("--resolution", type=click.Choice(["Q", "H", "F"]), default="Q",
+              show_default=True, help="Middlebury 2014 size: quarter, half or full.")
+@click.option("--to", "to", type=click.Path(file_okay=False), required=True,
+              help="The data root to put it in (DIR/middlebury2014-quarter/ ...).")
+@click.option("--mirror", default=None, metavar="URL",
+              help="Fetch the archives from this base URL instead of Middlebury's.")
+@click.pass_context
+@friendly_errors
+def datasets_download(ctx, dataset, resolution, to, mirror):
+    """Fetch a benchmark into a data root that 'vsmatch eval --data-root' reads.
+
+    \b
+    Example:
+      vsmatch datasets download middlebury2014 --resolution Q --to data
+      vsmatch eval --dataset middlebury2014-quarter --data-root data
+    """
+    if dataset != "middlebury2014":
+        folder = Path(to) / datasets.DATASETS[dataset].folder
+        raise click.ClickException(
+            f"{dataset} cannot be downloaded for you: it {datasets.DATASETS[dataset].source}"
+            .replace("DIR/", f"{Path(to)}/") + f" (vsmatch reads {folder}/training/)")
+    from .datasets.download import download_middlebury2014
+
+    quiet = ctx.find_root().obj.get("quiet")
+    folder, fetched = download_middlebury2014(resolution, to, mirror=mirror,
+                                              progress=not quiet)
+    scenes = sorted(p.name for p in folder.iterdir() if p.is_dir())
+    state = "downloaded" if fetched else "already complete"
+    _echo(ctx, f"{folder}: {state}, {len(scenes)} training scenes")
 
 
 @main.command()

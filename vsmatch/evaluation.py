@@ -1,4 +1,9 @@
-"""Bad-pixel figures on Middlebury scenes (EVALUATION.md)."""
+"""Running methods over a benchmark and scoring them (EVALUATION.md).
+
+A report is the ``--json`` document: ``{"dataset", "metric", "threshold", "methods":
+{name: {"scenes": {scene: {<mask>: headline, ..., "metrics": {<mask>: {measure: value}},
+"seconds", "range"}}, "avg": {<mask>: mean headline, "metrics": {...}}}}}``.
+"""
 
 from __future__ import annotations
 
@@ -12,66 +17,148 @@ from typing import Any
 import numpy as np
 import yaml
 
+from . import metrics
 from .config import Config, config_from_dict, load_config
-from .datasets import Scene
+from .datasets import DATASETS, Scene
 from .io import (colour_disparity, error_image, imwrite_atomic, write_disparity,
                  write_text_atomic)
+from .peers import PEER_METHODS, sgbm_disparity
 from .pipeline import match
 
+#: Kept for the callers that name the masks of the Middlebury v2 tables.
 MASKS = ("nonocc", "all", "disc")
 
-
-def bad_pixel_map(disp: np.ndarray, ground_truth: np.ndarray, threshold: float) -> np.ndarray:
-    """True where the estimate is off by more than ``threshold``; invalid estimates are bad."""
-    with np.errstate(invalid="ignore"):
-        good = np.abs(disp.astype(np.float64) - ground_truth) <= threshold
-    return ~good
+# Re-exported: the bad-pixel functions evaluation has always offered.
+bad_pixel_map = metrics.bad_pixel_map
+bad_percent = metrics.bad_percent
 
 
-def bad_percent(disp: np.ndarray, ground_truth: np.ndarray, mask: np.ndarray,
-                threshold: float = 1.0) -> float:
-    """Percentage of ``mask`` pixels that are bad (EVALUATION.md, "bad 1.0")."""
-    count = int(mask.sum())
-    if count == 0:
-        return float("nan")
-    return 100.0 * float(bad_pixel_map(disp, ground_truth, threshold)[mask].sum()) / count
+@dataclasses.dataclass(frozen=True)
+class Scoring:
+    """How a dataset is scored: the headline measure and every measure per mask."""
+
+    metric: str  # the headline measure's name: "bad1.0", "bad2.0", "D1", "out3"
+    threshold: float  # its error threshold in pixels
+
+    @property
+    def kitti(self) -> bool:
+        return not self.metric.startswith("bad")
+
+    def measures(self, disp: np.ndarray, gt: np.ndarray, mask: np.ndarray) -> dict:
+        if self.kitti:
+            return metrics.kitti_measures(disp, gt, mask)
+        thresholds = sorted({*metrics.MIDDLEBURY_THRESHOLDS, self.threshold})
+        return metrics.middlebury_measures(disp, gt, mask, thresholds)
+
+    def bad_map(self, disp: np.ndarray, gt: np.ndarray) -> np.ndarray:
+        if self.metric == "D1":
+            return metrics.d1_map(disp, gt)
+        return metrics.bad_pixel_map(disp, gt, self.threshold)
 
 
-def score_scene(disp: np.ndarray, scene: Scene, threshold: float = 1.0) -> dict[str, float]:
-    """Bad-pixel percentage of ``disp`` for each of the scene's masks."""
-    return {m: bad_percent(disp, scene.ground_truth, scene.masks[m], threshold) for m in MASKS}
+def scoring_for(dataset: str, threshold: float | None = None) -> Scoring:
+    """The dataset's scoring; ``threshold`` changes a Middlebury headline's bad-x.
+
+    A dataset outside the registry is scored like Middlebury v2 (bad 1.0).
+    """
+    spec = DATASETS.get(dataset)
+    if spec is not None and spec.metric != "bad":
+        if threshold is not None:
+            raise ValueError(f"--threshold does not apply to {dataset}: its measure "
+                             f"{spec.metric} has a fixed threshold")
+        return Scoring(spec.metric, 3.0)
+    if threshold is None:
+        threshold = spec.threshold if spec is not None else 1.0
+    return Scoring(metrics.bad_name(threshold), float(threshold))
 
 
-def average(per_scene: dict[str, dict[str, float]]) -> dict[str, float]:
-    """Plain mean over the scenes, mask by mask."""
-    return {m: float(np.mean([s[m] for s in per_scene.values()])) for m in MASKS}
+def score_scene(disp: np.ndarray, scene: Scene,
+                scoring: Scoring | float = 1.0) -> dict[str, Any]:
+    """Headline figure per mask of the scene, and every measure under ``"metrics"``.
+
+    ``scoring`` may be a bare bad-x threshold (Middlebury scoring).
+    """
+    if not isinstance(scoring, Scoring):
+        scoring = Scoring(metrics.bad_name(scoring), float(scoring))
+    per_mask = {m: scoring.measures(disp, scene.ground_truth, mask)
+                for m, mask in scene.masks.items()}
+    out: dict[str, Any] = {m: per_mask[m].get(scoring.metric, float("nan"))
+                           for m in per_mask}
+    out["metrics"] = per_mask
+    return out
 
 
-def evaluate(scenes: list[Scene], methods: dict, *, dataset: str, threshold: float = 1.0,
-             out_dir: str | Path | None = None,
-             on_done: Callable[[str, str], None] | None = None) -> dict[str, Any]:
+def average(per_scene: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """Plain mean over the scenes, mask by mask, of the headline and of every measure;
+    only the masks every scene has."""
+    scenes = list(per_scene.values())
+    masks = [m for m in scenes[0]["metrics"] if all(m in s["metrics"] for s in scenes)]
+    avg: dict[str, Any] = {m: float(np.mean([s[m] for s in scenes])) for m in masks}
+    avg["metrics"] = {m: {k: float(np.mean([s["metrics"][m].get(k, np.nan) for s in scenes]))
+                          for k in scenes[0]["metrics"][m]} for m in masks}
+    return avg
+
+
+def method_runner(method) -> tuple[Callable, Config | None]:
+    """A method name, config path or Config as ``(run(left, right, min_disp, max_disp),
+    config)``; the config is None for a peer method (:data:`PEER_METHODS`)."""
+    if method in PEER_METHODS:
+        return (lambda left, right, lo, hi: sgbm_disparity(left, right, max_disp=hi,
+                                                           min_disp=lo)), None
+    cfg = load_config(method)
+    return (lambda left, right, lo, hi: match(left, right, max_disp=hi, min_disp=lo,
+                                              config=cfg)), cfg
+
+
+def scene_ranges(scenes: list[Scene], auto: bool = False) -> dict[str, tuple[int, int]]:
+    """Each scene's search range: the official one, or the one estimated from the pair."""
+    if not auto:
+        return {s.name: (s.min_disp, s.max_disp) for s in scenes}
+    from .search_range import estimate_disparity_range
+
+    ranges = {}
+    for scene in scenes:
+        found = estimate_disparity_range(scene.left, scene.right)
+        ranges[scene.name] = (found.min_disp, found.max_disp)
+    return ranges
+
+
+def evaluate(scenes: list[Scene], methods: dict, *, dataset: str,
+             threshold: float | None = None, out_dir: str | Path | None = None,
+             on_done: Callable[[str, str], None] | None = None,
+             ranges: dict[str, tuple[int, int]] | None = None,
+             disparities: dict | None = None) -> dict[str, Any]:
     """Run each method on each scene and score it; the result is the ``--json`` document.
 
-    ``methods`` maps a display name to a config (name, path or :class:`Config`).
-    ``on_done(method, scene)`` is called after each run (progress reporting).
-    With ``out_dir``, each disparity is saved as PFM, a colour-mapped PNG and an error
-    image (bad ``nonocc`` pixels red), with the resolved config beside them.
+    ``methods`` maps a display name to a config (name, path or :class:`Config`) or a
+    peer method's name. ``ranges`` gives each scene's ``(min, max)`` disparity (default:
+    the official ranges). ``on_done(method, scene)`` is called after each run (progress
+    reporting); with ``disparities`` (a dict), each disparity is kept there under
+    ``(method, scene)``. With ``out_dir``, each disparity is saved as PFM, a colour-mapped
+    PNG and an error image (bad pixels red), with the resolved config beside them.
     """
-    report: dict[str, Any] = {"dataset": dataset, "threshold": threshold, "methods": {}}
-    for name, config in methods.items():
-        cfg = load_config(config)
+    scoring = scoring_for(dataset, threshold)
+    ranges = ranges or scene_ranges(scenes)
+    report: dict[str, Any] = {"dataset": dataset, "metric": scoring.metric,
+                              "threshold": scoring.threshold, "methods": {}}
+    for name, method in methods.items():
+        run_method, cfg = method_runner(method)
         folder = None if out_dir is None else Path(out_dir) / _safe_name(name)
         per_scene = {}
         for scene in scenes:
+            low, high = ranges[scene.name]
             start = time.perf_counter()
-            disp = match(scene.left, scene.right, max_disp=scene.max_disp, config=cfg)
+            disp = run_method(scene.left, scene.right, low, high)
             seconds = time.perf_counter() - start
-            per_scene[scene.name] = {**score_scene(disp, scene, threshold), "seconds": seconds}
+            per_scene[scene.name] = {**score_scene(disp, scene, scoring), "seconds": seconds,
+                                     "range": [low, high]}
             if folder is not None:
-                save_scene_outputs(folder, scene, disp, threshold)
+                save_scene_outputs(folder, scene, disp, scoring)
+            if disparities is not None:
+                disparities[(name, scene.name)] = disp
             if on_done is not None:
                 on_done(name, scene.name)
-        if folder is not None:
+        if folder is not None and cfg is not None:
             folder.mkdir(parents=True, exist_ok=True)
             write_text_atomic(folder / "config.yaml",
                               yaml.safe_dump(cfg.to_dict(), sort_keys=False))
@@ -86,14 +173,20 @@ def _safe_name(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "method"
 
 
-def save_scene_outputs(folder: Path, scene: Scene, disp: np.ndarray, threshold: float) -> None:
+def save_scene_outputs(folder: Path, scene: Scene, disp: np.ndarray,
+                       scoring: Scoring) -> None:
     """Disparity (PFM), colour-mapped disparity and error image of one scene."""
     folder.mkdir(parents=True, exist_ok=True)
     write_disparity(folder / f"{scene.name}.pfm", disp)
     imwrite_atomic(folder / f"{scene.name}_disp.png", colour_disparity(disp, scene.max_disp))
-    bad = bad_pixel_map(disp, scene.ground_truth, threshold)
     imwrite_atomic(folder / f"{scene.name}_error.png",
-                   error_image(disp, bad, scene.masks["nonocc"], scene.max_disp))
+                   error_image(disp, scoring.bad_map(disp, scene.ground_truth),
+                               headline_mask(scene), scene.max_disp))
+
+
+def headline_mask(scene: Scene) -> np.ndarray:
+    """The pixels an error image shows as evaluated: non-occluded where known, else all."""
+    return scene.masks.get("nonocc", scene.masks["all"])
 
 
 def format_tables(report: dict[str, Any]) -> str:
@@ -101,15 +194,18 @@ def format_tables(report: dict[str, Any]) -> str:
     methods = report["methods"]
     if not methods:
         return ""
-    scenes = list(next(iter(methods.values()))["scenes"])
+    first = next(iter(methods.values()))
+    scenes = list(first["scenes"])
+    masks = [m for m in first["avg"] if m != "metrics"]
     width = max(20, *(len(m) + 2 for m in methods))
+    cell = max(10, *(len(s) + 2 for s in scenes))
     lines = []
-    for mask in MASKS:
-        lines.append(f"{mask} bad {report['threshold']:.1f} (%)".ljust(width)
-                     + "".join(f"{s:>10}" for s in scenes) + f"{'avg':>10}")
+    for mask in masks:
+        lines.append(f"{mask} {report['metric']} (%)".ljust(width)
+                     + "".join(f"{s:>{cell}}" for s in scenes) + f"{'avg':>{cell}}")
         for name, result in methods.items():
             cells = [result["scenes"][s][mask] for s in scenes] + [result["avg"][mask]]
-            lines.append(name.ljust(width) + "".join(f"{v:10.2f}" for v in cells))
+            lines.append(name.ljust(width) + "".join(f"{v:{cell}.2f}" for v in cells))
         lines.append("")
     return "\n".join(lines).rstrip() + "\n"
 
@@ -173,10 +269,11 @@ def evaluate_noise(scenes: list[Scene], methods: dict, report: dict[str, Any], *
     """Add the noise protocol of EVALUATION.md to ``report`` (made by :func:`evaluate`).
 
     For each method and level: the mean over ``seeds`` seeds (0 .. seeds-1) of the
-    four-scene averages, under ``"noise": {"<level>": {"avg": ..., "per_seed": [...]}}``.
+    scene averages of bad-``threshold``, under ``"noise": {"<level>": {"avg": ...,
+    "per_seed": [...]}}``.
     """
-    for name, config in methods.items():
-        cfg = load_config(config)
+    for name, method in methods.items():
+        run_method, _ = method_runner(method)
         noise = {}
         for level in levels:
             per_seed = []
@@ -184,13 +281,14 @@ def evaluate_noise(scenes: list[Scene], methods: dict, report: dict[str, Any], *
                 per_scene = {}
                 for index, scene in enumerate(scenes):
                     left, right = noisy_pair(scene, index, level, seed)
-                    disp = match(left, right, max_disp=scene.max_disp, config=cfg)
+                    disp = run_method(left, right, scene.min_disp, scene.max_disp)
                     per_scene[scene.name] = score_scene(disp, scene, threshold)
                     if on_done is not None:
                         on_done(name, f"{scene.name} noise {level:g} seed {seed}")
-                per_seed.append(average(per_scene))
+                per_seed.append({m: v for m, v in average(per_scene).items()
+                                 if m != "metrics"})
             noise[f"{level:g}"] = {"avg": {m: float(np.mean([s[m] for s in per_seed]))
-                                           for m in MASKS},
+                                           for m in per_seed[0]},
                                    "per_seed": per_seed}
         report["methods"][name]["noise"] = noise
     return report
@@ -201,7 +299,7 @@ def format_noise_table(report: dict[str, Any], mask: str = "nonocc") -> str:
     methods = report["methods"]
     levels = list(next(iter(methods.values())).get("noise", {}))
     width = max(20, *(len(m) + 2 for m in methods))
-    lines = [f"{mask} bad {report['threshold']:.1f} (%) vs noise".ljust(width)
+    lines = [f"{mask} {metrics.bad_name(report['threshold'])} (%) vs noise".ljust(width)
              + f"{'none':>10}" + "".join(f"{float(lv) * 100:>9g}%" for lv in levels)]
     for name, result in methods.items():
         cells = [result["avg"][mask]] + [result["noise"][lv]["avg"][mask] for lv in levels]
