@@ -76,7 +76,7 @@ def bad_inputs(pair_files, tmp_path):
     (["l.png", "r.png", "-o", "d.pfm", "--max-disp", "0"], 2, "must be at least 1"),
     (["l.png", "r.png", "-o", "d.pfm", "--max-disp", "-3"], 2, "must be at least 1"),
     (["l.png", "r.png", "-o", "d.pfm", "--max-disp", "48"], 2, "less than the image width"),
-    (["l.png", "r.png", "-o", "d.pfm", "--max-disp", "x"], 2, "'x' is not a valid integer"),
+    (["l.png", "r.png", "-o", "d.pfm", "--max-disp", "x"], 2, "'x' is neither a whole number nor 'auto'"),
     (["l.png", "r.png", "-o", "d.pfm", "--config", "broken.yaml"], 1, "not valid YAML"),
     (["l.png", "r.png", "-o", "d.pfm", "--config", "unknown.yaml"], 1,
      "unknown config key 'arms.tau9'"),
@@ -185,10 +185,16 @@ def test_eval_json_has_the_documented_shape(data_dir, tmp_path):
     assert result.exit_code == 0, result.output
     report = json.loads(out.read_text())
     assert report["dataset"] == "middlebury2" and report["threshold"] == 1.0
+    assert report["metric"] == "bad1.0"
     census = report["methods"]["census"]
     assert list(census["scenes"]) == ["tsukuba", "venus", "teddy", "cones"]
-    assert set(census["scenes"]["cones"]) == {"nonocc", "all", "disc", "seconds"}
-    assert set(census["avg"]) == {"nonocc", "all", "disc"}
+    cones = census["scenes"]["cones"]
+    assert set(cones) == {"nonocc", "all", "disc", "seconds", "metrics", "range"}
+    assert cones["range"] == [0, 59]
+    assert cones["metrics"]["nonocc"]["bad1.0"] == cones["nonocc"]
+    assert {"bad0.5", "bad2.0", "bad4.0", "avgerr", "rms", "A90", "invalid"} <= set(
+        cones["metrics"]["all"])
+    assert set(census["avg"]) == {"nonocc", "all", "disc", "metrics"}
     assert (tmp_path / "imgs" / "census" / "teddy_error.png").exists()
 
 

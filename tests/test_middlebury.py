@@ -54,10 +54,15 @@ def test_middlebury2_masks_and_ranges(middlebury2):
 
 def test_ground_truth_scores_zero(middlebury2):
     scene = middlebury2[0]
-    assert evaluation.score_scene(scene.ground_truth, scene) == {
+    score = evaluation.score_scene(scene.ground_truth, scene)
+    assert {m: score[m] for m in ("nonocc", "all", "disc")} == {
         "nonocc": 0.0, "all": 0.0, "disc": 0.0}
+    assert score["metrics"]["nonocc"]["avgerr"] == 0.0
     shifted = scene.ground_truth + 1.5
-    assert evaluation.score_scene(shifted, scene)["nonocc"] == 100.0
+    shifted_score = evaluation.score_scene(shifted, scene)
+    assert shifted_score["nonocc"] == 100.0
+    assert shifted_score["metrics"]["all"]["bad2.0"] == 0.0
+    assert abs(shifted_score["metrics"]["all"]["rms"] - 1.5) < 1e-6
 
 
 def test_middlebury_third_loads_with_consistency_masks(data_dir):

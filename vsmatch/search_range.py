@@ -9,7 +9,8 @@ Two estimates of the largest disparity, each robust where the other is weak:
 - dense: vsmatch itself on the pair reduced to about 200 columns, searching half the
   width, the 99th percentile of the pixels that pass the left-right check. It sees
   near surfaces without corners, but can lock onto wrong matches under lighting changes,
-  so it may only raise the sparse estimate by :data:`DENSE_MAX_GAIN` at most.
+  so it may only raise the sparse estimate by :data:`DENSE_MAX_GAIN` at most, and is
+  not used alone (a blank pair passes its check at every disparity).
 
 The larger estimate, times :data:`MARGIN_FACTOR` plus :data:`MARGIN_PIXELS`, is the
 range's top (rounded up), and 0 its bottom. The constants were set on the 24 scenes of
@@ -43,7 +44,7 @@ DENSE_MIN_VALID = 0.1  # share of pixels passing the left-right check, else igno
 DENSE_MAX_GAIN = 1.5
 MARGIN_FACTOR = 1.3
 MARGIN_PIXELS = 8
-#: Fewer consistent matches than this, and no dense estimate: no range can be given.
+#: With fewer consistent matches than this, no range is given.
 MIN_MATCHES = 10
 
 
@@ -55,15 +56,14 @@ class RangeError(ValueError):
 class DisparityRange:
     min_disp: int
     max_disp: int
-    sparse: float | None  # the sparse estimate (pixels), None without enough matches
+    sparse: float  # the sparse estimate (pixels)
     dense: float | None  # the dense estimate, None when it was not usable
     matches: int  # consistent feature matches
 
     def describe(self) -> str:
-        parts = [f"disparity range {self.min_disp}..{self.max_disp}"]
-        if self.sparse is not None:
-            parts.append(f"{self.matches} feature matches, {SPARSE_PERCENTILE:g}th "
-                         f"percentile {self.sparse:.1f}")
+        parts = [f"disparity range {self.min_disp}..{self.max_disp}",
+                 f"{self.matches} feature matches, {SPARSE_PERCENTILE:g}th percentile "
+                 f"{self.sparse:.1f}"]
         if self.dense is not None:
             parts.append(f"dense check {self.dense:.1f}")
         return "; ".join(parts)
@@ -75,16 +75,12 @@ def estimate_disparity_range(left: np.ndarray, right: np.ndarray) -> DisparityRa
     disparities = sparse_disparities(left, right)
     sparse = (float(np.percentile(disparities, SPARSE_PERCENTILE))
               if disparities.size >= MIN_MATCHES else None)
-    dense = dense_estimate(left, right)
-    if sparse is None and dense is None:
-        raise RangeError(f"could not estimate the disparity range ({disparities.size} "
-                         "consistent feature matches, no dense estimate); give --max-disp")
     if sparse is None:
-        top = dense
-    elif dense is None:
-        top = sparse
-    else:
-        top = max(sparse, min(dense, DENSE_MAX_GAIN * sparse))
+        # The dense check alone is not trusted: on a blank pair every disparity passes.
+        raise RangeError(f"could not estimate the disparity range (only "
+                         f"{disparities.size} consistent feature matches); give --max-disp")
+    dense = dense_estimate(left, right)
+    top = sparse if dense is None else max(sparse, min(dense, DENSE_MAX_GAIN * sparse))
     max_disp = math.ceil(MARGIN_FACTOR * max(top, 0.0) + MARGIN_PIXELS)
     max_disp = int(min(max_disp, width - 2))
     return DisparityRange(0, max_disp, sparse, dense, int(disparities.size))

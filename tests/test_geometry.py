@@ -1,0 +1,105 @@
+"""Calibration files, depth and point clouds (geometry.py) and their PLY output."""
+
+import cv2
+import numpy as np
+import pytest
+from plyfile import PlyData
+
+from vsmatch import geometry, io
+
+MIDDLEBURY_CALIB = """cam0=[1038.018 0 322.037; 0 1038.018 243.393; 0 0 1]
+cam1=[1038.018 0 375.308; 0 1038.018 243.393; 0 0 1]
+doffs=53.271
+baseline=176.252
+width=718
+height=496
+ndisp=73
+isint=0
+vmin=8
+vmax=65
+"""
+
+KITTI_CALIB = """calib_time: 09-Jan-2012 13:57:47
+corner_dist: 9.950000e-02
+P_rect_00: 7.215377e+02 0.000000e+00 6.095593e+02 0.000000e+00 0.000000e+00 7.215377e+02 1.728540e+02 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00
+P_rect_02: 7.215377e+02 0.000000e+00 6.095593e+02 4.485728e+01 0.000000e+00 7.215377e+02 1.728540e+02 2.163791e-01 0.000000e+00 0.000000e+00 1.000000e+00 2.745884e-03
+P_rect_03: 7.215377e+02 0.000000e+00 6.095593e+02 -3.395242e+02 0.000000e+00 7.215377e+02 1.728540e+02 2.199936e+00 0.000000e+00 0.000000e+00 1.000000e+00 2.729905e-03
+"""
+
+
+def test_middlebury_calibration(tmp_path):
+    path = tmp_path / "calib.txt"
+    path.write_text(MIDDLEBURY_CALIB)
+    calib = geometry.read_calibration(path)
+    assert calib.focal == pytest.approx(1038.018) and calib.baseline == pytest.approx(176.252)
+    assert (calib.cx, calib.cy) == pytest.approx((322.037, 243.393))
+    assert calib.doffs == pytest.approx(375.308 - 322.037, abs=1e-3) and calib.ndisp == 73
+
+
+def test_kitti_calibration(tmp_path):
+    path = tmp_path / "calib_cam_to_cam.txt"
+    path.write_text(KITTI_CALIB)
+    calib = geometry.read_calibration(path)
+    assert calib.focal == pytest.approx(721.5377)
+    assert calib.baseline == pytest.approx((44.85728 + 339.5242) / 721.5377)  # ~0.53 m
+    assert calib.doffs == 0.0 and calib.ndisp is None
+
+
+@pytest.mark.parametrize("text,message", [
+    ("hello\n", "not a Middlebury calib.txt"),
+    ("cam0=[1 0 0; 0 1 0]\nbaseline=1\n", "3x3"),
+    ("cam0=[1 0 0; 0 1 0; 0 0 1]\n", "missing 'baseline'"),
+    ("cam0=[1 0 0; 0 1 0; 0 0 1]\nbaseline=-4\n", "baseline must be positive"),
+])
+def test_bad_calibration_is_one_clear_error(tmp_path, text, message):
+    path = tmp_path / "calib.txt"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=message):
+        geometry.read_calibration(path)
+
+
+def test_depth_formula_and_invalid_pixels():
+    calib = geometry.Calibration(focal=1000.0, baseline=0.5, doffs=2.0)
+    disp = np.array([[8.0, np.inf, -2.0, 48.0]], np.float32)
+    depth = geometry.depth_from_disparity(disp, calib)
+    assert depth[0, 0] == pytest.approx(1000 * 0.5 / 10)
+    assert depth[0, 3] == pytest.approx(1000 * 0.5 / 50)
+    assert np.isinf(depth[0, 1]) and np.isinf(depth[0, 2])  # invalid; d + doffs = 0
+
+
+def test_point_cloud_matches_opencv_reprojection(rng):
+    calib = geometry.Calibration(focal=700.0, baseline=120.0, cx=30.5, cy=18.0, doffs=3.0)
+    disp = rng.uniform(5, 40, size=(36, 60)).astype(np.float32)
+    disp[4, 7] = np.inf
+    image = rng.integers(0, 256, size=(36, 60, 3), dtype=np.uint8)
+    points, colours = geometry.point_cloud(disp, image, calib)
+    assert len(points) == disp.size - 1
+    # OpenCV's Q for a rectified pair (Tx = -B, principal points differing by doffs).
+    q = np.array([[1, 0, 0, -calib.cx], [0, 1, 0, -calib.cy], [0, 0, 0, calib.focal],
+                  [0, 0, 1 / calib.baseline, calib.doffs / calib.baseline]])
+    expected = cv2.reprojectImageTo3D(np.where(np.isfinite(disp), disp, 0).astype(np.float32),
+                                      q)
+    valid = np.isfinite(disp)
+    np.testing.assert_allclose(points, expected[valid], rtol=1e-4)
+    np.testing.assert_array_equal(colours, image[valid][:, ::-1])
+
+
+def test_max_depth_drops_far_points():
+    calib = geometry.Calibration(focal=100.0, baseline=1.0)
+    disp = np.array([[1.0, 10.0, 100.0]], np.float32)  # depths 100, 10, 1
+    image = np.zeros((1, 3), np.uint8)
+    points, colours = geometry.point_cloud(disp, image, calib, max_depth=10.0)
+    assert points[:, 2].tolist() == pytest.approx([10.0, 1.0]) and colours.shape == (2, 3)
+
+
+def test_ply_is_binary_little_endian_and_reads_back(tmp_path):
+    points = np.array([[1.5, -2.0, 30.0], [0.0, 0.25, 4.0]], np.float32)
+    colours = np.array([[255, 0, 10], [1, 2, 3]], np.uint8)
+    path = tmp_path / "c.ply"
+    io.write_point_cloud(path, geometry.ply_vertices(points, colours))
+    assert path.read_bytes().startswith(b"ply\nformat binary_little_endian 1.0\n")
+    vertex = PlyData.read(str(path))["vertex"]
+    assert [p.name for p in vertex.properties] == ["x", "y", "z", "red", "green", "blue"]
+    np.testing.assert_array_equal(np.stack([vertex[a] for a in "xyz"], axis=1), points)
+    np.testing.assert_array_equal(
+        np.stack([vertex[c] for c in ("red", "green", "blue")], axis=1), colours)

@@ -1,0 +1,105 @@
+"""The disparity range: an offset range (min_disp) honoured by every stage, and the range
+estimated from the pair (--max-disp auto)."""
+
+import cv2
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import vsmatch
+from vsmatch import datasets, io, search_range
+from vsmatch.cli import main
+
+from conftest import random_pair
+
+
+def textured_pair(rng, shift, height=60, width=120):
+    """A smooth random texture (features find corners in it), shifted by ``shift``."""
+    base = rng.integers(0, 256, size=(height // 4, (width + abs(shift)) // 4 + 1, 3),
+                        dtype=np.uint8)
+    wide = cv2.resize(base, ((width + abs(shift)) // 4 * 4 + 4, height),
+                      interpolation=cv2.INTER_CUBIC)
+    # Left pixel x shows what right pixel x - shift shows.
+    if shift >= 0:
+        return (np.ascontiguousarray(wide[:, :width]),
+                np.ascontiguousarray(wide[:, shift:shift + width]))
+    return (np.ascontiguousarray(wide[:, -shift:-shift + width]),
+            np.ascontiguousarray(wide[:, :width]))
+
+
+@pytest.mark.parametrize("shift,low,high", [(12, 8, 20), (12, 10, 13), (-3, -6, 2)])
+def test_an_offset_range_finds_the_shift(rng, shift, low, high):
+    left, right = textured_pair(rng, shift, height=30, width=70)
+    disp = vsmatch.match(left, right, min_disp=low, max_disp=high, config="paper")
+    if low > 0:
+        assert np.isinf(disp[:, :low]).all()  # no candidate there, as with SGBM
+        inner = disp[5:-5, low + 8:-5]
+    else:
+        assert np.isinf(disp[:, disp.shape[1] + low:]).all()
+        inner = disp[5:-5, 5:disp.shape[1] + low - 5]
+    assert np.mean(inner == shift) > 0.95
+
+
+def test_an_offset_range_is_the_zero_range_of_cropped_views(rng):
+    left, right = textured_pair(rng, 15, height=40, width=90)
+    offset = vsmatch.match(left, right, min_disp=10, max_disp=20)
+    cropped = vsmatch.match(np.ascontiguousarray(left[:, 10:]),
+                            np.ascontiguousarray(right[:, :-10]), max_disp=10)
+    np.testing.assert_array_equal(offset[:, 10:], cropped + 10)
+
+
+@pytest.mark.parametrize("low,high,message", [
+    (5, 5, "must be larger than min_disp"),
+    (50, 80, "too wide"),
+    (1.5, 8, "min_disp must be an integer"),
+])
+def test_bad_offset_ranges_are_refused(rng, low, high, message):
+    left, right = random_pair(rng, height=20, width=60)
+    with pytest.raises(ValueError, match=message):
+        vsmatch.match(left, right, min_disp=low, max_disp=high)
+
+
+@pytest.mark.parametrize("shift", [7, 25])
+def test_auto_range_covers_a_known_shift(rng, shift):
+    left, right = textured_pair(rng, shift, height=120, width=240)
+    found = search_range.estimate_disparity_range(left, right)
+    assert found.min_disp == 0 and shift <= found.max_disp <= 2 * shift + 20
+    assert found.matches >= search_range.MIN_MATCHES
+
+
+def test_no_range_from_a_blank_pair():
+    blank = np.full((60, 120, 3), 128, np.uint8)
+    with pytest.raises(search_range.RangeError, match="give --max-disp"):
+        search_range.estimate_disparity_range(blank, blank)
+
+
+def test_run_without_max_disp_estimates_it(rng, tmp_path):
+    left, right = textured_pair(rng, 9, height=120, width=240)
+    cv2.imwrite(str(tmp_path / "l.png"), left)
+    cv2.imwrite(str(tmp_path / "r.png"), right)
+    result = CliRunner().invoke(main, ["-v", "run", str(tmp_path / "l.png"),
+                                       str(tmp_path / "r.png"), "-o", str(tmp_path / "d.pfm")])
+    assert result.exit_code == 0, result.output
+    assert "feature matches" in result.output and "searching disparities 0.." in result.output
+    disp = io.read_disparity(tmp_path / "d.pfm")
+    assert np.mean(np.abs(disp[10:-10, 40:-10] - 9) < 0.5) > 0.9
+
+
+def test_run_on_a_blank_pair_asks_for_max_disp(tmp_path):
+    blank = np.full((60, 120, 3), 128, np.uint8)
+    cv2.imwrite(str(tmp_path / "l.png"), blank)
+    cv2.imwrite(str(tmp_path / "r.png"), blank)
+    result = CliRunner().invoke(main, ["run", str(tmp_path / "l.png"),
+                                       str(tmp_path / "r.png"), "-o", str(tmp_path / "d.pfm")])
+    assert result.exit_code == 1 and "give --max-disp" in result.output
+    assert not (tmp_path / "d.pfm").exists()
+
+
+@pytest.mark.data
+@pytest.mark.parametrize("dataset", ["middlebury2", "middlebury-third",
+                                     "middlebury2014-quarter", "kitti2015"])
+def test_auto_range_covers_the_true_range_on_every_scene(data_dir, dataset):
+    for scene in datasets.load_dataset(dataset, data_dir):
+        truth = scene.ground_truth[scene.masks.get("nonocc", scene.masks["all"])]
+        found = search_range.estimate_disparity_range(scene.left, scene.right)
+        assert found.min_disp <= truth.min() and truth.max() <= found.max_disp, scene.name

@@ -1,0 +1,123 @@
+"""vsmatch run with a calibration: depth, point cloud, the range from ndisp; and the
+output-path safety checks (no output over an input, outputs readable by others)."""
+
+import os
+
+import cv2
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from plyfile import PlyData
+
+from vsmatch import geometry, io
+from vsmatch.cli import main
+
+from conftest import random_pair
+
+CALIB = """cam0=[500.0 0 20.5; 0 510.0 15.0; 0 0 1]
+cam1=[500.0 0 22.5; 0 510.0 15.0; 0 0 1]
+doffs=2.0
+baseline=100.0
+width=48
+height=32
+ndisp=9
+"""
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+@pytest.fixture
+def pair(tmp_path, rng):
+    left, right = random_pair(rng, height=32, width=48, shift=3)
+    cv2.imwrite(str(tmp_path / "l.png"), left)
+    cv2.imwrite(str(tmp_path / "r.png"), right)
+    (tmp_path / "calib.txt").write_text(CALIB)
+    return tmp_path
+
+
+def test_cloud_points_reproject_to_their_pixels(pair):
+    result = invoke("-v", "run", pair / "l.png", pair / "r.png", "-o", pair / "d.pfm",
+                    "--calib", pair / "calib.txt", "--depth", pair / "z.pfm",
+                    "--cloud", pair / "c.ply", "--config", "paper")
+    assert result.exit_code == 0, result.output
+    assert "searching disparities 0..8" in result.output  # ndisp 9 sets the range
+    disp = io.read_disparity(pair / "d.pfm")
+    depth = io.read_disparity(pair / "z.pfm")
+    valid = np.isfinite(disp)
+    np.testing.assert_allclose(depth[valid], 500.0 * 100.0 / (disp[valid] + 2.0), rtol=1e-5)
+    vertex = PlyData.read(str(pair / "c.ply"))["vertex"]
+    x, y, z = (np.asarray(vertex[a], np.float64) for a in "xyz")
+    assert len(x) == valid.sum()
+    cols = 500.0 * x / z + 20.5
+    rows = 510.0 * y / z + 15.0
+    np.testing.assert_allclose(cols, np.round(cols), atol=1e-3)
+    np.testing.assert_allclose(rows, np.round(rows), atol=1e-3)
+    r, c = np.round(rows).astype(int), np.round(cols).astype(int)
+    np.testing.assert_allclose(z, 500.0 * 100.0 / (disp[r, c] + 2.0), rtol=1e-5)
+    left = cv2.imread(str(pair / "l.png"))
+    np.testing.assert_array_equal(vertex["red"], left[r, c, 2])
+
+
+def test_calibration_by_hand_matches_the_file(pair):
+    args = [pair / "l.png", pair / "r.png", "--max-disp", 8, "--config", "paper"]
+    assert invoke("run", *args, "-o", pair / "a.pfm", "--calib", pair / "calib.txt",
+                  "--depth", pair / "za.pfm").exit_code == 0
+    assert invoke("run", *args, "-o", pair / "b.pfm", "--focal", 500, "--baseline", 100,
+                  "--doffs", 2, "--depth", pair / "zb.pfm").exit_code == 0
+    assert (pair / "za.pfm").read_bytes() == (pair / "zb.pfm").read_bytes()
+
+
+@pytest.mark.parametrize("extra,code,message", [
+    (["-o", "l.png"], 1, "would overwrite the input l.png"),
+    (["-o", "./sub/../r.png"], 1, "would overwrite the input"),
+    (["-o", "d.pfm", "--depth", "d.pfm"], 1, "would overwrite the output d.pfm"),
+    (["-o", "d.pfm", "--depth", "z.pfm"], 2, "need --calib"),
+    (["-o", "d.pfm", "--depth", "z.png", "--calib", "calib.txt"], 2, "must end in .pfm"),
+    (["-o", "d.pfm", "--cloud", "c.txt", "--calib", "calib.txt"], 2, "must end in .ply"),
+    (["-o", "d.pfm", "--focal", "500"], 2, "--focal and --baseline go together"),
+    (["-o", "d.pfm", "--calib", "calib.txt", "--focal", "5"], 2, "not both"),
+    (["-o", "d.pfm", "--calib", "nothere.txt"], 1, "nothere.txt: file not found"),
+    (["-o", "d.pfm", "--calib", "l.png"], 1, "cannot read the calibration"),
+])
+def test_output_and_calibration_errors(pair, monkeypatch, extra, code, message):
+    (pair / "sub").mkdir()
+    monkeypatch.chdir(pair)
+    before = sorted(pair.rglob("*"))
+    original = (pair / "l.png").read_bytes()
+    result = invoke("run", "l.png", "r.png", "--max-disp", 8, *extra)
+    assert result.exit_code == code, result.output
+    assert message in result.output and len(result.output.strip().splitlines()) == 1
+    assert sorted(pair.rglob("*")) == before
+    assert (pair / "l.png").read_bytes() == original
+
+
+def test_outputs_get_the_umask_permissions(pair):
+    old = os.umask(0o022)
+    try:
+        result = invoke("run", pair / "l.png", pair / "r.png", "-o", pair / "d.pfm",
+                        "--max-disp", 8, "--calib", pair / "calib.txt",
+                        "--cloud", pair / "c.ply")
+        assert result.exit_code == 0, result.output
+        assert (pair / "d.pfm").stat().st_mode & 0o777 == 0o644
+        assert (pair / "c.ply").stat().st_mode & 0o777 == 0o644
+        os.umask(0o007)
+        io.write_text_atomic(pair / "t.json", "{}")
+        assert (pair / "t.json").stat().st_mode & 0o777 == 0o660
+    finally:
+        os.umask(old)
+
+
+def test_hard_link_to_an_input_is_refused(pair):
+    os.link(pair / "l.png", pair / "alias.png")
+    with pytest.raises(ValueError, match="would overwrite the input"):
+        io.check_distinct_paths([pair / "l.png"], [pair / "alias.png"])
+    io.check_distinct_paths([pair / "l.png"], [pair / "new.pfm", None])  # no error
+
+
+def test_python_api_is_exported():
+    import vsmatch
+
+    assert vsmatch.depth_from_disparity is geometry.depth_from_disparity
+    assert vsmatch.point_cloud is geometry.point_cloud
