@@ -1,0 +1,134 @@
+"""Middlebury 2014 and KITTI: the readers, the scoring, and accuracy through the real
+pipeline on the real data (README, "Results"); the thresholds lock in what was measured
+with a small margin."""
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from vsmatch import datasets, evaluation
+from vsmatch.cli import main
+
+
+def test_kitti2012_layout_is_read_with_both_masks(tmp_path, rng):
+    training = tmp_path / "kitti2012" / "training"
+    for sub in ("colored_0", "colored_1", "disp_occ", "disp_noc"):
+        (training / sub).mkdir(parents=True)
+    image = rng.integers(0, 256, size=(20, 40, 3), dtype=np.uint8)
+    occ = np.zeros((20, 40), np.uint16)
+    occ[5:15, 10:30] = 12 * 256 + 128  # 12.5 px
+    noc = occ.copy()
+    noc[5:15, 10:15] = 0
+    for frame in ("000007_10.png", "000007_11.png"):
+        cv2.imwrite(str(training / "colored_0" / frame), image)
+        cv2.imwrite(str(training / "colored_1" / frame), image)
+    cv2.imwrite(str(training / "disp_occ" / "000007_10.png"), occ)
+    cv2.imwrite(str(training / "disp_noc" / "000007_10.png"), noc)
+    [scene] = datasets.load_dataset("kitti2012", tmp_path)
+    assert scene.name == "000007" and scene.max_disp == 191
+    assert scene.masks["all"].sum() == 200 and scene.masks["nonocc"].sum() == 150
+    assert scene.ground_truth[10, 20] == 12.5
+    report = evaluation.evaluate([scene], {"m": "paper"}, dataset="kitti2012",
+                                 ranges={"000007": (0, 16)})
+    assert report["metric"] == "out3" and report["threshold"] == 3.0
+    figures = report["methods"]["m"]["scenes"]["000007"]
+    assert set(figures) == {"nonocc", "all", "metrics", "seconds", "range"}
+    assert figures["all"] == figures["metrics"]["all"]["out3"]
+
+
+def test_missing_scene_name_is_one_clear_error(tmp_path):
+    (tmp_path / "kitti2015" / "training" / "disp_occ_0").mkdir(parents=True)
+    with pytest.raises(datasets.DatasetError, match="no scenes"):
+        datasets.load_dataset("kitti2015", tmp_path)
+
+
+def test_threshold_does_not_apply_to_kitti(tmp_path):
+    result = CliRunner().invoke(main, ["eval", "--dataset", "kitti2015", "--threshold", "2",
+                                       "--data-root", str(tmp_path)])
+    assert result.exit_code == 2 and "fixed threshold" in result.output
+
+
+@pytest.mark.data
+def test_middlebury2014_reader(data_dir):
+    scenes = datasets.load_dataset("middlebury2014-quarter", data_dir)
+    assert [s.name for s in scenes] == ["Adirondack", "ArtL", "Jadeplant", "Motorcycle",
+                                        "MotorcycleE", "Piano", "PianoL", "Teddy"]
+    adirondack = scenes[0]
+    assert adirondack.max_disp == 72 and adirondack.calib.ndisp == 73  # calib.txt ndisp
+    nonocc = adirondack.masks["nonocc"]
+    assert 0.7 < nonocc.mean() < adirondack.masks["all"].mean() <= 1.0
+    # calib.txt's vmin/vmax bound the true disparities (PFM scale not applied)
+    assert 8 <= adirondack.ground_truth[nonocc].min() and \
+        adirondack.ground_truth[nonocc].max() <= 65
+
+
+@pytest.mark.data
+def test_kitti2015_reader(data_dir):
+    scenes = datasets.load_dataset("kitti2015", data_dir)
+    assert [s.name for s in scenes] == ["000000", "000001", "000046"]
+    for scene in scenes:
+        assert list(scene.masks) == ["all"]  # no disp_noc_0 here
+        assert 0.1 < scene.masks["all"].mean() < 0.3
+        assert scene.ground_truth.max() < scene.max_disp
+
+
+@pytest.fixture(scope="module")
+def middlebury2014_report(data_dir):
+    scenes = datasets.load_dataset("middlebury2014-quarter", data_dir)
+    disparities = {}
+    report = evaluation.evaluate(scenes, {"default": "default", "sgbm": "opencv-sgbm"},
+                                 dataset="middlebury2014-quarter", disparities=disparities)
+    return scenes, report, disparities
+
+
+@pytest.mark.data
+def test_default_on_middlebury2014(middlebury2014_report):
+    _, report, _ = middlebury2014_report
+    assert report["metric"] == "bad2.0"
+    ours, sgbm = (report["methods"][m] for m in ("default", "sgbm"))
+    assert ours["avg"]["nonocc"] <= 10.0  # measured 9.61; SGBM 18.21
+    assert ours["avg"]["nonocc"] < sgbm["avg"]["nonocc"] - 5
+    assert ours["scenes"]["Teddy"]["nonocc"] < 2.6 and ours["scenes"]["Piano"]["nonocc"] < 17
+    assert ours["avg"]["metrics"]["nonocc"]["invalid"] == 0.0
+
+
+@pytest.mark.data
+def test_results_figure(middlebury2014_report, tmp_path):
+    from vsmatch.figure import ROW_HEIGHT, results_figure
+
+    scenes, report, disparities = middlebury2014_report
+    figure = results_figure(scenes, report, disparities)
+    assert figure.dtype == np.uint8 and figure.shape[0] > len(scenes) * ROW_HEIGHT
+    # Bad pixels are drawn pure red in the error columns.
+    assert (np.all(figure == (0, 0, 255), axis=2)).sum() > 1000
+
+
+@pytest.mark.data
+def test_default_on_kitti2015_and_the_json_shape(data_dir, tmp_path):
+    out = tmp_path / "k.json"
+    result = CliRunner().invoke(main, ["-q", "eval", "--dataset", "kitti2015", "--data-root",
+                                       str(data_dir), "--method", "default", "--json", str(out),
+                                       "--figure", str(tmp_path / "k.png")])
+    assert result.exit_code == 0, result.output
+    report = json.loads(out.read_text())
+    assert report["metric"] == "D1"
+    scenes = report["methods"]["default"]["scenes"]
+    assert set(scenes["000000"]) == {"all", "metrics", "seconds", "range"}
+    assert scenes["000000"]["range"] == [0, 191]
+    assert scenes["000000"]["all"] == scenes["000000"]["metrics"]["all"]["D1"]
+    assert report["methods"]["default"]["avg"]["all"] <= 8.5  # measured 8.12; SGBM 14.74
+    assert cv2.imread(str(tmp_path / "k.png")) is not None
+
+
+@pytest.mark.data
+def test_auto_range_accuracy_on_middlebury2014(middlebury2014_report):
+    """--max-disp auto within 1.5 points of the official ranges (measured 10.00 vs 9.61)."""
+    scenes, report, _ = middlebury2014_report
+    ranges = evaluation.scene_ranges(scenes, auto=True)
+    auto = evaluation.evaluate(scenes, {"default": "default"},
+                               dataset="middlebury2014-quarter", ranges=ranges)
+    official = report["methods"]["default"]["avg"]["nonocc"]
+    assert auto["methods"]["default"]["avg"]["nonocc"] <= official + 1.5
