@@ -80,7 +80,8 @@ def test_parallel_jobs_give_the_same_bytes(pair_list, tmp_path):
 
 @pytest.mark.parametrize("text,message", [
     ("a.png,b.png\n", "line 1: expected left,right,output"),
-    ("a.png,b.png,c.pfm,many\n", "max_disp 'many' is not a whole number"),
+    ("a.png,b.png,c.pfm,many\n", "max_disp 'many' is not a whole number or 'auto'"),
+    ("a.png,b.png,c.pfm,0\n", "max_disp 0 must be at least 1"),
 ])
 def test_bad_pair_lists_are_refused(tmp_path, text, message):
     csv = tmp_path / "bad.csv"
@@ -111,3 +112,37 @@ def test_same_bytes_with_one_and_two_threads(data_dir, tmp_path):
         assert proc.returncode == 0, proc.stderr
         outputs.append(out.read_bytes())
     assert outputs[0] == outputs[1]
+
+
+def test_csv_ranges_may_be_auto_or_left_to_the_default(tmp_path):
+    csv = tmp_path / "p.csv"
+    csv.write_text("a.png,b.png,c.pfm,auto\na.png,b.png,d.pfm,12\na.png,b.png,e.pfm\n")
+    jobs = batch.read_pair_list(csv, None)
+    assert [j.max_disp for j in jobs] == [None, 12, None]
+    assert batch.read_pair_list(csv, 30)[2].max_disp == 30
+
+
+def test_batch_estimates_each_range_by_default(tmp_path):
+    from test_range import textured_pair
+
+    rng = np.random.default_rng(3)
+    for name, shift in (("near", 14), ("far", 5)):
+        left, right = textured_pair(rng, shift, height=120, width=240)
+        (tmp_path / "scenes" / name).mkdir(parents=True)
+        cv2.imwrite(str(tmp_path / "scenes" / name / "left.png"), left)
+        cv2.imwrite(str(tmp_path / "scenes" / name / "right.png"), right)
+    result = invoke("batch", tmp_path / "scenes", "-o", tmp_path / "out")
+    assert result.exit_code == 0, result.output
+    for name, shift in (("near", 14), ("far", 5)):
+        disp = io.read_disparity(tmp_path / "out" / f"{name}.pfm")
+        assert np.mean(np.abs(disp[10:-10, 40:-10] - shift) < 0.5) > 0.9
+
+
+def test_an_output_over_an_input_fails_that_pair(tmp_path, rng):
+    write_pair(tmp_path, rng, "l.png", "r.png")
+    csv = tmp_path / "p.csv"
+    csv.write_text("l.png,r.png,l.png,8\n")
+    before = (tmp_path / "l.png").read_bytes()
+    result = invoke("batch", csv, "--overwrite")
+    assert result.exit_code == 1 and "would overwrite the input" in result.output
+    assert (tmp_path / "l.png").read_bytes() == before
