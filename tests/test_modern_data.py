@@ -132,3 +132,52 @@ def test_auto_range_accuracy_on_middlebury2014(middlebury2014_report):
                                dataset="middlebury2014-quarter", ranges=ranges)
     official = report["methods"]["default"]["avg"]["nonocc"]
     assert auto["methods"]["default"]["avg"]["nonocc"] <= official + 1.5
+
+
+@pytest.mark.data
+def test_headline_figures_agree_with_an_independent_evaluation(middlebury2014_report,
+                                                               data_dir, tmp_path):
+    """The figures recomputed from the written files, following MiddEval3's evaldisp
+    (bad = error > 2 or invalid, over mask0nocc == 255 with finite ground truth) and
+    reading the ground truth's raw floats, not through vsmatch's readers."""
+    from vsmatch import io
+
+    scenes, report, disparities = middlebury2014_report
+    for scene in scenes:
+        path = tmp_path / f"{scene.name}.pfm"
+        io.write_disparity(path, disparities[("default", scene.name)])
+        disp = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)  # OpenCV's reader: scale -1
+        folder = data_dir / "middlebury2014-quarter" / scene.name
+        raw = (folder / "disp0GT.pfm").read_bytes()
+        header_end = [i for i, c in enumerate(raw) if c == 0x0A][2] + 1
+        height, width = disp.shape
+        gt = np.frombuffer(raw[header_end:], "<f4", count=height * width)
+        gt = gt.reshape(height, width)[::-1]
+        mask = (cv2.imread(str(folder / "mask0nocc.png"), cv2.IMREAD_GRAYSCALE) == 255) & \
+            np.isfinite(gt)
+        invalid = ~np.isfinite(disp)
+        bad = (np.abs(np.where(invalid, 0, disp) - gt) > 2.0) | invalid
+        expected = 100.0 * bad[mask].sum() / mask.sum()
+        assert report["methods"]["default"]["scenes"][scene.name]["nonocc"] == \
+            pytest.approx(expected, abs=1e-9), scene.name
+
+
+@pytest.mark.data
+def test_kitti_d1_agrees_with_the_devkit_rule(data_dir):
+    """D1 from the 16-bit PNGs as KITTI's devkit computes it, against the report."""
+    from vsmatch import io
+
+    [scene] = datasets.load_dataset("kitti2015", data_dir, names=["000046"])
+    disp = evaluation.method_runner("opencv-sgbm")[0](scene.left, scene.right, 0, 191)
+    report = evaluation.evaluate([scene], {"sgbm": "opencv-sgbm"}, dataset="kitti2015")
+    png = io.disparity_to_png16(disp)
+    gt_png = cv2.imread(str(data_dir / "kitti2015/training/disp_occ_0/000046_10.png"),
+                        cv2.IMREAD_UNCHANGED)
+    d_est, d_gt = png.astype(np.float64) / 256, gt_png.astype(np.float64) / 256
+    known = gt_png > 0
+    error = np.abs(d_gt - d_est)
+    outlier = (error > 3) & (error / np.maximum(d_gt, 1e-9) > 0.05)
+    expected = 100.0 * outlier[known].sum() / known.sum()
+    # PNG output rounds to 1/256 px, so allow a few pixels' difference.
+    assert report["methods"]["sgbm"]["scenes"]["000046"]["all"] == pytest.approx(
+        expected, abs=0.05)
