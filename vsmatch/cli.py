@@ -150,7 +150,7 @@ def _check_output_path(path: Path) -> None:
     if suffix not in io.DISPARITY_FORMATS:
         raise click.BadParameter(f"'{path}' must end in .pfm (float32) or .png (16-bit)",
                                  param_hint="'-o'")
-    _check_output_path_folder(path)
+    _check_writable_folder(path)
 
 
 def _writable(folder: Path) -> bool:
@@ -206,7 +206,7 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx
         raise click.BadParameter(f"'{cloud_path}' must end in .ply", param_hint="'--cloud'")
     for extra in (depth_path, cloud_path):
         if extra is not None:
-            _check_output_path_folder(Path(extra))
+            _check_writable_folder(Path(extra))
     io.check_distinct_paths([left, right, calib], [output, depth_path, cloud_path])
     camera = _calibration(calib, focal, baseline, cx, cy, doffs)
     if (depth_path or cloud_path) and camera is None:
@@ -244,7 +244,7 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx
             _echo(ctx, f"wrote {path}")
 
 
-def _check_output_path_folder(path: Path) -> None:
+def _check_writable_folder(path: Path) -> None:
     folder = _check_output_folder(path)
     if not _writable(folder):
         raise click.ClickException(f"{path}: output folder '{folder}' is not writable")
@@ -373,7 +373,7 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, figure_pa
                                      disparities=disparities)
         if levels:
             evaluation.evaluate_noise(scenes, configs, report, levels=levels, seeds=seeds,
-                                      threshold=report["threshold"], on_done=done)
+                                      on_done=done)
     _echo(ctx, evaluation.format_tables(report))
     if levels:
         _echo(ctx, evaluation.format_noise_table(report))

@@ -264,14 +264,15 @@ def noisy_pair(scene: Scene, scene_index: int, level: float,
 
 
 def evaluate_noise(scenes: list[Scene], methods: dict, report: dict[str, Any], *,
-                   levels: list[float], seeds: int, threshold: float = 1.0,
+                   levels: list[float], seeds: int,
                    on_done: Callable[[str, str], None] | None = None) -> dict[str, Any]:
     """Add the noise protocol of EVALUATION.md to ``report`` (made by :func:`evaluate`).
 
-    For each method and level: the mean over ``seeds`` seeds (0 .. seeds-1) of the
-    scene averages of bad-``threshold``, under ``"noise": {"<level>": {"avg": ...,
-    "per_seed": [...]}}``.
+    For each method and level: the mean over ``seeds`` seeds (0 .. seeds-1) of the scene
+    averages of the report's headline measure (bad 1.0 when it names none), under
+    ``"noise": {"<level>": {"avg": ..., "per_seed": [...]}}``.
     """
+    scoring = Scoring(report.get("metric", "bad1.0"), report.get("threshold", 1.0))
     for name, method in methods.items():
         run_method, _ = method_runner(method)
         noise = {}
@@ -282,7 +283,7 @@ def evaluate_noise(scenes: list[Scene], methods: dict, report: dict[str, Any], *
                 for index, scene in enumerate(scenes):
                     left, right = noisy_pair(scene, index, level, seed)
                     disp = run_method(left, right, scene.min_disp, scene.max_disp)
-                    per_scene[scene.name] = score_scene(disp, scene, threshold)
+                    per_scene[scene.name] = score_scene(disp, scene, scoring)
                     if on_done is not None:
                         on_done(name, f"{scene.name} noise {level:g} seed {seed}")
                 per_seed.append({m: v for m, v in average(per_scene).items()
@@ -299,7 +300,7 @@ def format_noise_table(report: dict[str, Any], mask: str = "nonocc") -> str:
     methods = report["methods"]
     levels = list(next(iter(methods.values())).get("noise", {}))
     width = max(20, *(len(m) + 2 for m in methods))
-    lines = [f"{mask} {metrics.bad_name(report['threshold'])} (%) vs noise".ljust(width)
+    lines = [f"{mask} {report['metric']} (%) vs noise".ljust(width)
              + f"{'none':>10}" + "".join(f"{float(lv) * 100:>9g}%" for lv in levels)]
     for name, result in methods.items():
         cells = [result["avg"][mask]] + [result["noise"][lv]["avg"][mask] for lv in levels]
