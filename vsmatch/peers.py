@@ -24,20 +24,15 @@ def sgbm_matcher(max_disp: int, channels: int = 3, *, min_disp: int = 0,
 
 def sgbm_disparity(left: np.ndarray, right: np.ndarray, *, max_disp: int,
                    min_disp: int = 0) -> np.ndarray:
-    """SGBM's left disparity (float32) with its holes filled from the left neighbour
-    (EVALUATION.md): each invalid pixel takes the nearest valid disparity to its left,
-    or to its right at the start of a row; a row with none stays invalid."""
+    """SGBM's left disparity (float32) with its holes filled from the left, as in
+    EVALUATION.md: each invalid pixel takes the nearest valid disparity to its left.
+    What has no valid pixel to its left (SGBM's empty left margin) stays invalid."""
     channels = 1 if left.ndim == 2 else left.shape[2]
     raw = sgbm_matcher(max_disp, channels, min_disp=min_disp).compute(left, right)
     disp = raw.astype(np.float32) / 16.0
     valid = raw >= (min_disp * 16)
-    width = disp.shape[1]
-    columns = np.where(valid, np.arange(width), -1)
-    last_left = np.maximum.accumulate(columns, axis=1)
-    first_right = np.minimum.accumulate(np.where(valid, np.arange(width), width)[:, ::-1],
-                                        axis=1)[:, ::-1]
-    source = np.where(last_left >= 0, last_left, first_right)
+    last_valid = np.maximum.accumulate(np.where(valid, np.arange(disp.shape[1]), -1), axis=1)
     rows = np.arange(disp.shape[0])[:, None]
-    filled = disp[rows, np.minimum(source, width - 1)]
-    filled[source >= width] = INVALID_DISPARITY
-    return np.where(valid, disp, filled).astype(np.float32)
+    filled = disp[rows, np.maximum(last_valid, 0)]
+    filled[last_valid < 0] = INVALID_DISPARITY
+    return filled.astype(np.float32)
