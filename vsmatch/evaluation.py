@@ -25,9 +25,6 @@ from .io import (colour_disparity, error_image, imwrite_atomic, write_disparity,
 from .peers import PEER_METHODS, sgbm_disparity
 from .pipeline import match
 
-#: Kept for the callers that name the masks of the Middlebury v2 tables.
-MASKS = ("nonocc", "all", "disc")
-
 # Re-exported: the bad-pixel functions evaluation has always offered.
 bad_pixel_map = metrics.bad_pixel_map
 bad_percent = metrics.bad_percent

@@ -209,7 +209,9 @@ def read_disparity(path: str | Path) -> np.ndarray:
     image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     if image is None:
         raise ImageError(f"{path}: not a readable disparity map")
-    return png16_to_disparity(image)
+    if path.suffix.lower() == ".png":
+        return png16_to_disparity(image)
+    return image.astype(np.float32)
 
 
 def colour_disparity(disp: np.ndarray, max_disp: float) -> np.ndarray:
