@@ -3,21 +3,26 @@
 from __future__ import annotations
 
 import csv
-import multiprocessing
-import os
-from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor, as_completed
+import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from . import io, pipeline
 from .config import Config
+from .executors import Executor
+from .executors.serial import SerialExecutor
 from .search_range import estimate_disparity_range
 
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
 
 #: File names of a pair inside a scene folder, tried in order (Middlebury v2, 2014, 2005/6).
 PAIR_NAMES = (("imL", "imR"), ("im0", "im1"), ("view1", "view5"), ("left", "right"))
+
+#: Folders of a recording: left and right frames of the same name (KITTI, KITTI raw,
+#: KITTI 2012, and plain left/right).
+PAIRED_FOLDERS = (("image_2", "image_3"), ("image_02/data", "image_03/data"),
+                  ("colored_0", "colored_1"), ("left", "right"))
 
 #: Suffixes of a pair of files side by side in one folder: NAME_left.png, NAME_right.png.
 PAIR_SUFFIXES = (("_left", "_right"), ("_L", "_R"))
@@ -83,11 +88,14 @@ def _image_with_stem(folder: Path, stem: str) -> Path | None:
 
 def find_pairs(folder: str | Path, out_dir: str | Path, *, max_disp: int | None,
                suffix: str = ".pfm") -> list[PairJob]:
-    """The pairs in ``folder``: each sub-folder holding a pair named as in
-    :data:`PAIR_NAMES`, and files named ``NAME_left`` / ``NAME_right`` (or ``_L`` / ``_R``).
-    Each pair's output is ``out_dir/NAME`` + ``suffix``."""
+    """The pairs in ``folder``: the frames of a recording (:func:`recording_pairs`), else
+    each sub-folder holding a pair named as in :data:`PAIR_NAMES`, and files named
+    ``NAME_left`` / ``NAME_right`` (or ``_L`` / ``_R``). Each pair's output is
+    ``out_dir/NAME`` + ``suffix``."""
     folder, out_dir = Path(folder), Path(out_dir)
-    jobs = []
+    jobs = recording_pairs(folder, out_dir, max_disp=max_disp, suffix=suffix)
+    if jobs:
+        return jobs
     for sub in sorted(p for p in folder.iterdir() if p.is_dir()):
         for left_stem, right_stem in PAIR_NAMES:
             left, right = _image_with_stem(sub, left_stem), _image_with_stem(sub, right_stem)
@@ -106,6 +114,21 @@ def find_pairs(folder: str | Path, out_dir: str | Path, *, max_disp: int | None,
     return jobs
 
 
+def recording_pairs(folder: Path, out_dir: Path, *, max_disp: int | None,
+                    suffix: str) -> list[PairJob]:
+    """The frames of a recording in ``folder`` (see :data:`PAIRED_FOLDERS`): each left
+    image with a right image of the same name, in name order; outputs named after them."""
+    for left_name, right_name in PAIRED_FOLDERS:
+        left_dir, right_dir = folder / left_name, folder / right_name
+        if left_dir.is_dir() and right_dir.is_dir():
+            frames = sorted(p for p in left_dir.iterdir()
+                            if p.suffix.lower() in IMAGE_EXTENSIONS
+                            and (right_dir / p.name).is_file())
+            return [PairJob(p, right_dir / p.name, out_dir / f"{p.stem}{suffix}", max_disp)
+                    for p in frames]
+    return []
+
+
 def match_pair(job: PairJob, config: Config) -> None:
     """Read, match and write one pair; raises with a one-line message on failure."""
     io.check_distinct_paths([job.left, job.right], [job.output])
@@ -121,7 +144,7 @@ def match_pair(job: PairJob, config: Config) -> None:
     io.write_disparity(job.output, disp)
 
 
-def _match_pair_quietly(job: PairJob, config: Config) -> str | None:
+def _match_pair_quietly(job: PairJob, *, config: Config) -> str | None:
     """:func:`match_pair` in a worker: the error message, or None."""
     try:
         match_pair(job, config)
@@ -130,45 +153,25 @@ def _match_pair_quietly(job: PairJob, config: Config) -> str | None:
     return None
 
 
-def _init_worker(threads: int) -> None:
-    import numba
-
-    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
-
-
-def run_batch(jobs: list[PairJob], config: Config, *, workers: int = 1,
+def run_batch(jobs: list[PairJob], config: Config, *, executor: Executor | None = None,
               on_done: Callable[[PairJob, str | None], None] | None = None
               ) -> list[tuple[PairJob, str]]:
     """Match every job; returns the failures as ``(job, message)``, in job order.
 
-    With ``workers`` > 1 the pairs run in that many processes, each with its share of
-    the cores for Numba's threads. ``on_done(job, error)`` follows each pair.
+    The pairs run on ``executor`` (default: one after the other in this process), one
+    task per pair. ``on_done(job, error)`` follows each pair as it completes. Temporary
+    files that a killed task left beside its output are removed at the end.
     """
     failures = {}
-    for job, error in _results(jobs, config, workers):
-        if error is not None:
-            failures[job] = error
-        if on_done is not None:
-            on_done(job, error)
-    return [(job, failures[job]) for job in jobs if job in failures]
-
-
-def _results(jobs, config, workers) -> Iterator[tuple[PairJob, str | None]]:
-    if workers <= 1:
+    task = functools.partial(_match_pair_quietly, config=config)
+    try:
+        with executor or SerialExecutor() as runner:
+            for job, error in runner.map_unordered(task, jobs):
+                if error is not None:
+                    failures[job] = error
+                if on_done is not None:
+                    on_done(job, error)
+    finally:
         for job in jobs:
-            yield job, _match_pair_quietly(job, config)
-        return
-    threads = max(1, (os.cpu_count() or 1) // workers)
-    # Fresh interpreters, not forks: forking a process whose Numba thread pool is running
-    # can kill the child.
-    with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker,
-                             initargs=(threads,),
-                             mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = {pool.submit(_match_pair_quietly, job, config): job for job in jobs}
-        try:
-            for future in as_completed(futures):
-                yield futures[future], future.result()
-        except BaseException:
-            for future in futures:
-                future.cancel()
-            raise
+            io.remove_stale_temporaries(job.output)
+    return [(job, failures[job]) for job in jobs if job in failures]

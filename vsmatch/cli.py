@@ -11,17 +11,17 @@ import functools
 import json
 import os
 import sys
-from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 import click
 
 from . import __version__, batch, datasets, evaluation, geometry, io, pipeline, synthetic
 from .config import ConfigError, bundled_config_names, load_config
+from .executors import ExecutorError, make_executor
 from .peers import PEER_METHODS
 
 EXPECTED_ERRORS = (ConfigError, io.ImageError, datasets.DatasetError, batch.BatchError,
-                   ValueError, OSError)
+                   ExecutorError, ValueError, OSError)
 
 #: Exit status after Ctrl-C (128 + SIGINT), as shells report it.
 EXIT_INTERRUPTED = 130
@@ -455,17 +455,25 @@ def bench_command(ctx, data_root, config, repeats, no_cold, no_scaling, json_pat
 @config_option
 @click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
               help="Pairs matched at once, each in its own process.")
+@click.option("--scheduler", default=None, metavar="tcp://HOST:PORT|local:N",
+              help="Run the pairs on a Dask cluster: a running scheduler's address, or "
+                   "local:N to start N worker processes here (pip install "
+                   "'vsmatch[cluster]'). Inputs and outputs must be at the same paths on "
+                   "every worker.")
 @click.option("--overwrite", is_flag=True, help="Match pairs whose output already exists.")
 @click.pass_context
 @friendly_errors
-def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, overwrite):
+def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, overwrite):
     """Match every pair listed in a CSV file or found in a folder.
 
     \b
     A CSV has rows left,right,output[,max_disp] (paths relative to the CSV's folder;
-    an optional header row starting with 'left'; max_disp a number or 'auto'). A folder holds one sub-folder per
+    an optional header row starting with 'left'; max_disp a number or 'auto'). A
+    folder holds a recording (image_2/ + image_3/ as KITTI, image_02/data/ +
+    image_03/data/ as KITTI raw, colored_0/ + colored_1/, or left/ + right/, frames of
+    the same name; each disparity goes to OUT_DIR/FRAME.pfm), or one sub-folder per
     pair (imL/imR, im0/im1, view1/view5 or left/right images), or files NAME_left.png
-    and NAME_right.png side by side; each disparity goes to OUT_DIR/NAME.pfm.
+    and NAME_right.png side by side (OUT_DIR/NAME.pfm).
 
     Pairs whose output exists are skipped unless --overwrite. A failed pair does not
     stop the others: the failures are listed at the end and the exit status is 1.
@@ -474,6 +482,7 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, overwrite):
     Example:
       vsmatch batch pairs.csv --jobs 2
       vsmatch batch scenes/ -o disparities --format png --max-disp 100
+      vsmatch batch drive/ -o disparities --scheduler tcp://10.0.0.5:8786
     """
     from tqdm import tqdm
 
@@ -495,11 +504,10 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, overwrite):
         def done(job: batch.PairJob, error: str | None) -> None:
             bar.set_postfix_str(job.output.name)
             bar.update(1)
-        try:
-            failures = batch.run_batch(todo, cfg, workers=jobs, on_done=done)
-        except BrokenProcessPool:
-            raise click.ClickException("a worker process died (out of memory?); "
-                                       "outputs written so far are complete") from None
+        failures = []
+        if todo:
+            with make_executor(jobs, scheduler) as executor:
+                failures = batch.run_batch(todo, cfg, executor=executor, on_done=done)
     _echo(ctx, f"matched {len(todo) - len(failures)} of {len(jobs_list)} pairs"
                + (f", skipped {skipped} with existing output" if skipped else "")
                + (f", {len(failures)} failed" if failures else ""))

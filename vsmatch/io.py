@@ -6,6 +6,7 @@ place, so an interrupted run never leaves a partial file behind.
 
 from __future__ import annotations
 
+import glob
 import os
 import tempfile
 from pathlib import Path
@@ -72,7 +73,7 @@ def write_atomic(path: str | Path, encode) -> None:
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise OSError(f"{folder}: output folder does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}",
+    fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path), suffix=_temporary_suffix(path),
                                dir=folder)
     os.close(fd)
     try:
@@ -84,6 +85,29 @@ def write_atomic(path: str | Path, encode) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def _temporary_prefix(path: Path) -> str:
+    return f".{path.stem}."
+
+
+def _temporary_suffix(path: Path) -> str:
+    return f".tmp{path.suffix}"
+
+
+def remove_stale_temporaries(path: str | Path) -> None:
+    """Remove the temporary files that writes of ``path`` left behind when their process
+    was killed (a normal failure removes its own). Only for when no write of ``path`` is
+    under way."""
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    prefix, suffix = _temporary_prefix(path), _temporary_suffix(path)
+    if not folder.is_dir():
+        return
+    for candidate in folder.glob(f"{glob.escape(prefix)}*{glob.escape(suffix)}"):
+        middle = candidate.name[len(prefix):-len(suffix)]
+        if "." not in middle:  # mkstemp's random part only, not another file's name
+            candidate.unlink(missing_ok=True)
 
 
 def current_umask() -> int:

@@ -1,0 +1,144 @@
+"""vsmatch batch on a Dask cluster (a LocalCluster here, never another machine), recordings
+as paired folders, and the failures of workers and schedulers."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import cv2
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from vsmatch import batch, io
+from vsmatch.cli import main
+
+from test_range import textured_pair
+
+
+@pytest.fixture(scope="module")
+def distributed():
+    try:
+        import distributed
+    except ImportError:
+        if os.environ.get("CI") == "true":
+            pytest.fail("Dask's distributed is not installed: CI installs the cluster extra")
+        pytest.skip("Dask's distributed is not installed (pip install 'vsmatch[cluster]')")
+    return distributed
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def write_recording(folder, count, size=(240, 360), layout=("image_2", "image_3")):
+    rng = np.random.default_rng(7)
+    left_dir, right_dir = folder / layout[0], folder / layout[1]
+    left_dir.mkdir(parents=True)
+    right_dir.mkdir(parents=True)
+    for k in range(count):
+        left, right = textured_pair(rng, 4 + k % 9, height=size[0], width=size[1])
+        cv2.imwrite(str(left_dir / f"{k:06d}_10.png"), left)
+        cv2.imwrite(str(right_dir / f"{k:06d}_10.png"), right)
+    return folder
+
+
+def outputs(folder):
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+@pytest.mark.parametrize("layout", [("image_2", "image_3"), ("image_02/data", "image_03/data"),
+                                    ("colored_0", "colored_1"), ("left", "right")])
+def test_recordings_are_found_as_paired_folders(tmp_path, layout):
+    write_recording(tmp_path / "drive", 3, size=(40, 60), layout=layout)
+    (tmp_path / "drive" / layout[0] / "000009_10.png").write_bytes(b"")  # no right frame
+    (tmp_path / "drive" / layout[0] / "notes.txt").write_text("not a frame")
+    jobs = batch.find_pairs(tmp_path / "drive", tmp_path / "out", max_disp=None, suffix=".png")
+    assert [j.output.name for j in jobs] == ["000000_10.png", "000001_10.png", "000002_10.png"]
+    assert all(j.right.parent.name in layout[1] and j.left.name == j.right.name for j in jobs)
+
+
+def test_a_killed_task_leaves_no_temporary_file(tmp_path):
+    out = tmp_path / "a.pfm"
+    stale = tmp_path / ".a.k2j4x_9q.tmp.pfm"  # what mkstemp names a write of a.pfm
+    other = tmp_path / ".a.b.k2j4x_9q.tmp.pfm"  # a write of a.b.pfm: not ours
+    stale.write_bytes(b"half")
+    other.write_bytes(b"half")
+    io.remove_stale_temporaries(out)
+    assert not stale.exists() and other.exists()
+
+
+def test_local_cluster_gives_the_same_bytes_as_one_job(distributed, tmp_path):
+    src = write_recording(tmp_path / "drive", 6)
+    serial = invoke("-q", "batch", src, "-o", tmp_path / "serial", "--max-disp", 24)
+    assert serial.exit_code == 0, serial.output
+    result = invoke("-q", "batch", src, "-o", tmp_path / "dask", "--max-disp", 24,
+                    "--scheduler", "local:2")
+    assert result.exit_code == 0, result.output
+    assert outputs(tmp_path / "dask") == outputs(tmp_path / "serial")
+    assert len(outputs(tmp_path / "dask")) == 6
+
+
+def test_a_worker_killed_mid_batch_loses_nothing(distributed, tmp_path):
+    src = write_recording(tmp_path / "drive", 10, size=(360, 540))
+    reference = invoke("-q", "batch", src, "-o", tmp_path / "serial", "--max-disp", 40)
+    assert reference.exit_code == 0, reference.output
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        pids = client.run(os.getpid)
+        out = tmp_path / "dask"
+        proc = subprocess.Popen([sys.executable, "-m", "vsmatch", "batch", str(src),
+                                 "-o", str(out), "--max-disp", "40", "--scheduler",
+                                 cluster.scheduler_address],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 120
+        while not (out.is_dir() and any(out.glob("*.pfm"))) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        busy = [address for address, keys in client.processing().items() if keys]
+        assert busy, "no worker had a task when the first output appeared"
+        victim = pids[busy[0]]
+        os.kill(victim, signal.SIGKILL)  # in the middle of the batch, holding tasks
+        stdout, stderr = proc.communicate(timeout=300)
+        assert proc.returncode == 0, stderr
+        assert "matched 10 of 10 pairs" in stdout
+        assert victim not in client.run(os.getpid).values()  # it did die
+    assert outputs(out) == outputs(tmp_path / "serial")  # every output whole, no temporary
+
+
+def test_an_unreachable_scheduler_is_one_line(distributed, tmp_path):
+    import socket
+
+    import dask
+
+    src = write_recording(tmp_path / "drive", 1, size=(40, 60))
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with dask.config.set({"distributed.comm.timeouts.connect": "2s"}):
+        result = invoke("batch", src, "-o", tmp_path / "out", "--max-disp", 8,
+                        "--scheduler", f"tcp://127.0.0.1:{port}")
+    assert result.exit_code == 1, result.output
+    lines = [line for line in result.output.strip().splitlines() if "Error" in line]
+    assert len(lines) == 1 and "cannot reach the Dask scheduler" in lines[0]
+    assert "Traceback" not in result.output
+    assert not any((tmp_path / "out").iterdir())
+
+
+def test_missing_dask_says_how_to_install(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import fails as if absent
+    src = write_recording(tmp_path / "drive", 1, size=(40, 60))
+    result = invoke("batch", src, "-o", tmp_path / "out", "--max-disp", 8,
+                    "--scheduler", "local:2")
+    assert result.exit_code == 1
+    assert "pip install 'vsmatch[cluster]'" in result.output
+    assert len(result.output.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("value", ["local:0", "local:x"])
+def test_bad_local_cluster_size(tmp_path, value):
+    src = write_recording(tmp_path / "drive", 1, size=(40, 60))
+    result = invoke("batch", src, "-o", tmp_path / "out", "--max-disp", 8, "--scheduler", value)
+    assert result.exit_code == 1 and "expected local:N" in result.output

@@ -1,0 +1,86 @@
+"""Tasks on a Dask distributed cluster (the optional ``cluster`` extra).
+
+``tcp://HOST:PORT`` connects to a running scheduler; ``local:N`` starts a LocalCluster of
+N single-threaded worker processes on this machine, each with its share of the cores for
+Numba. Every worker must have vsmatch installed and see the inputs and outputs at the
+same paths (shared storage). Dask reruns the tasks of a worker that dies on another one;
+a task writes its output atomically, so a killed task leaves no partial output.
+"""
+
+from __future__ import annotations
+
+import logging
+
+from .base import Executor, ExecutorError, share_of_cores
+
+INSTALL_HINT = "pip install 'vsmatch[cluster]'"
+
+
+def _import_distributed():
+    try:
+        import distributed
+    except ImportError:
+        raise ExecutorError(f"--scheduler needs Dask's distributed package: "
+                            f"{INSTALL_HINT}") from None
+    return distributed
+
+
+def parse_local(scheduler: str) -> int | None:
+    """N of ``local:N`` (None for another address); refuses a bad N."""
+    if not scheduler.startswith("local:"):
+        return None
+    text = scheduler[len("local:"):]
+    if not text.isdigit() or int(text) < 1:
+        raise ExecutorError(f"--scheduler {scheduler}: expected local:N with N >= 1 workers")
+    return int(text)
+
+
+class ClusterExecutor(Executor):
+    def __init__(self, scheduler: str):
+        workers = parse_local(scheduler)
+        distributed = _import_distributed()
+        self._cluster = None
+        try:
+            if workers is not None:
+                threads = share_of_cores(workers)
+                self._cluster = distributed.LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True,
+                    dashboard_address=None, silence_logs=logging.ERROR,
+                    env={"NUMBA_NUM_THREADS": str(threads)})
+                self._client = distributed.Client(self._cluster)
+            else:
+                self._client = distributed.Client(scheduler)
+        except (OSError, TimeoutError) as exc:
+            self.close()
+            raise ExecutorError(f"cannot reach the Dask scheduler at {scheduler} "
+                                f"({_reason(exc)})") from None
+
+    def close(self) -> None:
+        for part in (getattr(self, "_client", None), self._cluster):
+            if part is not None:
+                try:
+                    part.close()
+                except Exception:  # noqa: BLE001 - closing a broken connection
+                    pass
+
+    def map_unordered(self, fn, items):
+        distributed = _import_distributed()
+        items = list(items)
+        # pure=False: a task is run even if an equal one ran before (outputs may have
+        # been removed since); each item keeps its own key.
+        futures = self._client.map(fn, items, pure=False)
+        index = {future.key: item for future, item in zip(futures, items)}
+        try:
+            for future in distributed.as_completed(futures):
+                yield index[future.key], future.result()
+        except (OSError, TimeoutError, distributed.CancelledError,
+                distributed.comm.CommClosedError) as exc:
+            raise ExecutorError(f"lost the Dask cluster ({_reason(exc)}); outputs written "
+                                "so far are complete") from None
+        finally:
+            self._client.cancel(futures)
+
+
+def _reason(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__

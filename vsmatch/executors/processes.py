@@ -1,0 +1,39 @@
+"""Tasks in a pool of local worker processes, each with its share of the cores."""
+
+from __future__ import annotations
+
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+
+from .base import Executor, ExecutorError, share_of_cores
+
+
+def _init_worker(threads: int) -> None:
+    import numba
+
+    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+
+
+class ProcessExecutor(Executor):
+    def __init__(self, workers: int):
+        # Fresh interpreters, not forks: forking a process whose Numba thread pool is
+        # running can kill the child.
+        self._pool = ProcessPoolExecutor(max_workers=workers, initializer=_init_worker,
+                                         initargs=(share_of_cores(workers),),
+                                         mp_context=multiprocessing.get_context("spawn"))
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def map_unordered(self, fn, items):
+        futures = {self._pool.submit(fn, item): item for item in items}
+        try:
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+        except BrokenProcessPool:
+            raise ExecutorError("a worker process died (out of memory?); outputs written "
+                                "so far are complete") from None
+        finally:
+            for future in futures:
+                future.cancel()
