@@ -500,14 +500,15 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
     todo = [j for j in jobs_list if overwrite or not j.output.exists()]
     skipped = len(jobs_list) - len(todo)
     quiet = ctx.find_root().obj.get("quiet")
-    with tqdm(total=len(todo), disable=quiet, unit="pair", leave=False) as bar:
-        def done(job: batch.PairJob, error: str | None) -> None:
-            bar.set_postfix_str(job.output.name)
-            bar.update(1)
-        failures = []
-        if todo:
-            with make_executor(jobs, scheduler) as executor:
-                failures = batch.run_batch(todo, cfg, executor=executor, on_done=done)
+    failures = []
+    if todo:
+        # The executor first: a cluster that cannot be had fails before any output.
+        with make_executor(jobs, scheduler) as executor, \
+                tqdm(total=len(todo), disable=quiet, unit="pair", leave=False) as bar:
+            def done(job: batch.PairJob, error: str | None) -> None:
+                bar.set_postfix_str(job.output.name)
+                bar.update(1)
+            failures = batch.run_batch(todo, cfg, executor=executor, on_done=done)
     _echo(ctx, f"matched {len(todo) - len(failures)} of {len(jobs_list)} pairs"
                + (f", skipped {skipped} with existing output" if skipped else "")
                + (f", {len(failures)} failed" if failures else ""))
