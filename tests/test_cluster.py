@@ -74,9 +74,11 @@ def test_local_cluster_gives_the_same_bytes_as_one_job(distributed, tmp_path):
     src = write_recording(tmp_path / "drive", 6)
     serial = invoke("-q", "batch", src, "-o", tmp_path / "serial", "--max-disp", 24)
     assert serial.exit_code == 0, serial.output
+    environ = dict(os.environ)
     result = invoke("-q", "batch", src, "-o", tmp_path / "dask", "--max-disp", 24,
                     "--scheduler", "local:2")
     assert result.exit_code == 0, result.output
+    assert dict(os.environ) == environ  # Dask's worker settings do not leak into ours
     assert outputs(tmp_path / "dask") == outputs(tmp_path / "serial")
     assert len(outputs(tmp_path / "dask")) == 6
 

@@ -482,7 +482,7 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
     Example:
       vsmatch batch pairs.csv --jobs 2
       vsmatch batch scenes/ -o disparities --format png --max-disp 100
-      vsmatch batch drive/ -o disparities --scheduler tcp://10.0.0.5:8786
+      vsmatch batch drive/ -o disparities --scheduler tcp://scheduler-host:8786
     """
     from tqdm import tqdm
 

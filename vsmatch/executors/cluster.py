@@ -9,7 +9,9 @@ a task writes its output atomically, so a killed task leaves no partial output.
 
 from __future__ import annotations
 
+import functools
 import logging
+import os
 
 from .base import Executor, ExecutorError, share_of_cores
 
@@ -36,22 +38,35 @@ def parse_local(scheduler: str) -> int | None:
 
 
 def _local_cluster(distributed, workers: int):
-    """N single-threaded worker processes, Numba sharing the cores between them.
+    """N single-threaded worker processes on this machine.
 
     Dask starts its worker processes with MALLOC_TRIM_THRESHOLD_=65536, which makes glibc
     hand freed memory back to the system at once; the pipeline allocates and frees
     image-sized arrays between stages and then pays page faults for each (measured: a pair
-    1.4x slower). The workers started here keep glibc's default.
+    about 1.4x slower). The workers started here keep glibc's default. Dask also writes
+    its worker settings into this process's environment; they are put back afterwards.
     """
     import dask
 
-    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
-    environ.pop("MALLOC_TRIM_THRESHOLD_", None)
-    environ["NUMBA_NUM_THREADS"] = str(share_of_cores(workers))
-    with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
-        return distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
-                                        processes=True, dashboard_address=None,
-                                        silence_logs=logging.ERROR)
+    environ = {**dask.config.get("distributed.nanny.pre-spawn-environ", {}),
+               "MALLOC_TRIM_THRESHOLD_": None}  # None: not set at all
+    saved = dict(os.environ)
+    try:
+        with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
+            return distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
+                                            processes=True, dashboard_address=None,
+                                            silence_logs=logging.ERROR)
+    finally:
+        os.environ.clear()
+        os.environ.update(saved)
+
+
+def _with_threads(fn, threads: int, item):
+    """``fn(item)`` with Numba using ``threads`` threads in this (worker) thread."""
+    import numba
+
+    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    return fn(item)
 
 
 class ClusterExecutor(Executor):
@@ -59,6 +74,9 @@ class ClusterExecutor(Executor):
         workers = parse_local(scheduler)
         distributed = _import_distributed()
         self._cluster = None
+        # On a local cluster the workers share this machine's cores; a remote worker
+        # uses its machine's (its NUMBA_NUM_THREADS).
+        self._threads = share_of_cores(workers) if workers is not None else None
         try:
             if workers is not None:
                 self._cluster = _local_cluster(distributed, workers)
@@ -84,6 +102,8 @@ class ClusterExecutor(Executor):
         items = list(items)
         # pure=False: a task is run even if an equal one ran before (outputs may have
         # been removed since); each item keeps its own key.
+        if self._threads is not None:
+            fn = functools.partial(_with_threads, fn, self._threads)
         futures = self._client.map(fn, items, pure=False)
         index = {future.key: item for future, item in zip(futures, items)}
         try:
