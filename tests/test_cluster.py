@@ -144,3 +144,19 @@ def test_bad_local_cluster_size(tmp_path, value):
     src = write_recording(tmp_path / "drive", 1, size=(40, 60))
     result = invoke("batch", src, "-o", tmp_path / "out", "--max-disp", 8, "--scheduler", value)
     assert result.exit_code == 1 and "expected local:N" in result.output
+
+
+def fails_on_three(item):
+    if item == 3:
+        raise RuntimeError("no three")
+    return item * 10
+
+
+@pytest.mark.parametrize("how", [dict(jobs=2), dict(scheduler="local:1"), dict(jobs=1)])
+def test_an_unexpected_task_error_fails_that_item_only(distributed, how):
+    from vsmatch.executors import make_executor
+
+    with make_executor(**how) as executor:
+        results = dict(executor.map_unordered(fails_on_three, range(5)))
+    assert results[2] == 20 and results[4] == 40
+    assert "RuntimeError" in results[3] and "no three" in results[3]

@@ -3,7 +3,8 @@
 An executor is a context manager with one method, ``map_unordered(fn, items)``, which
 runs ``fn(item)`` for every item and yields ``(item, result)`` as each one completes.
 ``fn`` must be a module-level function (it may be sent to another process or machine)
-and should return its errors rather than raise them.
+and should return its errors as messages; an exception it raises anyway becomes that
+item's result as ``"ExceptionType: message"``, so one failed task never stops the others.
 
 - ``serial``: in this process, one after the other (``--jobs 1``);
 - ``processes``: a pool of local worker processes (``--jobs N``);

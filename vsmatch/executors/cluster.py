@@ -100,19 +100,25 @@ class ClusterExecutor(Executor):
     def map_unordered(self, fn, items):
         distributed = _import_distributed()
         items = list(items)
-        # pure=False: a task is run even if an equal one ran before (outputs may have
-        # been removed since); each item keeps its own key.
         if self._threads is not None:
             fn = functools.partial(_with_threads, fn, self._threads)
+        # pure=False: each item its own task, run even if an equal one ran before.
         futures = self._client.map(fn, items, pure=False)
         index = {future.key: item for future, item in zip(futures, items)}
+        lost = (OSError, TimeoutError, distributed.CancelledError,
+                distributed.comm.CommClosedError)
         try:
             for future in distributed.as_completed(futures):
-                yield index[future.key], future.result()
-        except (OSError, TimeoutError, distributed.CancelledError,
-                distributed.comm.CommClosedError) as exc:
-            raise ExecutorError(f"lost the Dask cluster ({_reason(exc)}); outputs written "
-                                "so far are complete") from None
+                try:
+                    result = future.result()
+                except lost as exc:
+                    raise ExecutorError(f"lost the Dask cluster ({_reason(exc)}); outputs "
+                                        "written so far are complete") from None
+                except distributed.KilledWorker:
+                    result = "every worker that ran it died (out of memory?)"
+                except Exception as exc:  # noqa: BLE001 - a failed task, not a failed batch
+                    result = _reason(exc)
+                yield index[future.key], result
         finally:
             self._client.cancel(futures)
 

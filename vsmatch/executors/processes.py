@@ -30,10 +30,14 @@ class ProcessExecutor(Executor):
         futures = {self._pool.submit(fn, item): item for item in items}
         try:
             for future in as_completed(futures):
-                yield futures[future], future.result()
-        except BrokenProcessPool:
-            raise ExecutorError("a worker process died (out of memory?); outputs written "
-                                "so far are complete") from None
+                try:
+                    result = future.result()
+                except BrokenProcessPool:
+                    raise ExecutorError("a worker process died (out of memory?); outputs "
+                                        "written so far are complete") from None
+                except Exception as exc:  # noqa: BLE001 - a failed task, not a failed batch
+                    result = f"{type(exc).__name__}: {exc}"
+                yield futures[future], result
         finally:
             for future in futures:
                 future.cancel()

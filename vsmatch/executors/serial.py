@@ -8,4 +8,8 @@ from .base import Executor
 class SerialExecutor(Executor):
     def map_unordered(self, fn, items):
         for item in items:
-            yield item, fn(item)
+            try:
+                result = fn(item)
+            except Exception as exc:  # noqa: BLE001 - a failed task, not a failed batch
+                result = f"{type(exc).__name__}: {exc}"
+            yield item, result
