@@ -88,7 +88,7 @@ def test_a_worker_killed_mid_batch_loses_nothing(distributed, tmp_path):
     reference = invoke("-q", "batch", src, "-o", tmp_path / "serial", "--max-disp", 40)
     assert reference.exit_code == 0, reference.output
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         pids = client.run(os.getpid)
         out = tmp_path / "dask"

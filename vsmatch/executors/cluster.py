@@ -54,7 +54,7 @@ def _local_cluster(distributed, workers: int):
     try:
         with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
             return distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
-                                            processes=True, dashboard_address=None,
+                                            processes=True, dashboard_address=":0",
                                             silence_logs=logging.ERROR)
     finally:
         os.environ.clear()
