@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 import cv2
+import pytest
 
 from vsmatch import bench, synthetic
 from vsmatch.datasets import Scene
@@ -41,3 +42,27 @@ def test_child_reports_time_and_memory(tmp_path):
     assert report["cost_volume_mb"] == 192 * 128 * 41 * 4 / 2 ** 20
     text = bench._memory_line("x", report)
     assert "x the cost volume" in text
+
+
+def test_upscaled_scene_scales_views_truth_and_range():
+    import numpy as np
+
+    pair = synthetic.make_pair(width=40, height=30)
+    scene = Scene("s", pair.left, pair.right, pair.disparity, {"nonocc": pair.nonocc}, 12)
+    left, right, gt, mask, max_disp = bench.upscaled_scene(scene, 2)
+    assert left.shape == (60, 80, 3) and right.shape == left.shape
+    assert max_disp == 25  # 13 levels become 26
+    np.testing.assert_array_equal(gt[::2, ::2], pair.disparity * 2)
+    np.testing.assert_array_equal(mask[1::2, 1::2], pair.nonocc)
+
+
+@pytest.mark.data
+def test_size_child_reports_time_memory_and_accuracy(data_dir):
+    proc = subprocess.run([sys.executable, "-m", "vsmatch.bench", "size", "--matcher",
+                           "sgbm-5", "--factor", "1", "--data-root", str(data_dir)],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    report = json.loads(proc.stdout.splitlines()[-1])
+    assert report["size"] == [718, 496] and report["levels"] == 73
+    assert report["threshold"] == 2.0 and 5 < report["bad_nonocc"] < 40
+    assert report["peak_mb"] >= report["before_match_mb"] > 0 and report["seconds"] > 0

@@ -1,10 +1,14 @@
 """Speed and memory of vsmatch against OpenCV's StereoSGBM (EVALUATION.md, "Speed").
 
 Timings of the matching itself come from one process, vsmatch and SGBM alternating on the
-same images after a warm-up call, so the ratio holds on a shared, noisy machine. Start-up
-and memory are measured in child processes: a first call with an empty compilation cache,
-the whole ``vsmatch run`` command with a warm cache, and the peak resident memory of a
-pair and of the scaling run (cones upsampled 3x, 180 disparities).
+same images after a warm-up call, so the ratio holds on a shared, noisy machine: the
+twelve standard pairs (the four middlebury2 pairs and the eight Middlebury 2014 pairs at
+quarter size, each with its official range). Start-up and memory are measured in child
+processes: a first call with an empty compilation cache, the whole ``vsmatch run`` command
+with a warm cache, the peak resident memory of a pair, and the size series: Adirondack
+(Middlebury 2014) upscaled 1x, 2x and 4x (bicubic; ground truth x factor, nearest), matched
+by vsmatch and by SGBM in its 5-direction and HH modes, with time, peak memory and bad
+(2 x factor) on the non-occluded pixels.
 """
 
 from __future__ import annotations
@@ -26,8 +30,13 @@ from . import datasets, pipeline
 from .peers import sgbm_matcher
 from .config import load_config
 
-SCALING_FACTOR = 3
-SCALING_LEVELS = 180
+#: The pairs timed against SGBM HH in one process.
+STANDARD_DATASETS = ("middlebury2", "middlebury2014-quarter")
+#: The size series: a scene upscaled by each factor, and the matchers run on it.
+SIZE_DATASET, SIZE_SCENE = "middlebury2014-quarter", "Adirondack"
+SIZE_FACTORS = (1, 2, 4)
+SIZE_MATCHERS = ("vsmatch", "sgbm-5", "sgbm-hh")
+SGBM_MODES = {"sgbm-5": cv2.STEREO_SGBM_MODE_SGBM, "sgbm-hh": cv2.STEREO_SGBM_MODE_HH}
 
 
 def time_pairs(scenes, config, repeats: int) -> dict[str, Any]:
@@ -155,12 +164,76 @@ def _child_match(argv: list[str]) -> None:
                       "cost_volume_mb": volume_mb, "stages": result.seconds}))
 
 
+def size_run(data_root, matcher: str, factor: int, config: str | None) -> dict[str, Any]:
+    """One matcher on the size-series scene upscaled ``factor`` times, in a child process
+    (warm cache): seconds, peak memory and bad (2 x factor) on non-occluded pixels."""
+    args = ["size", "--matcher", matcher, "--factor", str(factor),
+            "--config", config or "default"]
+    if data_root is not None:
+        args += ["--data-root", str(data_root)]
+    if matcher == "vsmatch":
+        _run_child(args)  # fill the cache for this shape of call
+    return _run_child(args)
+
+
+def upscaled_scene(scene, factor: int):
+    """The scene ``factor`` times larger: views bicubic, ground truth and mask nearest,
+    disparities and range times ``factor``."""
+    if factor == 1:
+        return scene.left, scene.right, scene.ground_truth, scene.masks["nonocc"], \
+            scene.max_disp
+    size = (scene.left.shape[1] * factor, scene.left.shape[0] * factor)
+    left, right = (cv2.resize(v, size, interpolation=cv2.INTER_CUBIC)
+                   for v in (scene.left, scene.right))
+    gt = cv2.resize(scene.ground_truth, size, interpolation=cv2.INTER_NEAREST) * factor
+    mask = cv2.resize(scene.masks["nonocc"].astype("uint8"), size,
+                      interpolation=cv2.INTER_NEAREST) > 0
+    return left, right, gt, mask, (scene.max_disp + 1) * factor - 1
+
+
+def _child_size(argv: list[str]) -> None:
+    """Child entry: one size-series run, printed as JSON."""
+    import argparse
+
+    from .metrics import bad_percent
+
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--matcher", choices=SIZE_MATCHERS, required=True)
+    ap.add_argument("--factor", type=int, required=True)
+    ap.add_argument("--config", default="default")
+    ap.add_argument("--data-root", default=None)
+    args = ap.parse_args(argv)
+    [scene] = datasets.load_dataset(SIZE_DATASET, args.data_root, names=[SIZE_SCENE])
+    left, right, gt, mask, max_disp = upscaled_scene(scene, args.factor)
+    del scene
+    if args.matcher == "vsmatch":
+        crop = (slice(0, 48), slice(0, 64))  # load the kernels before the baseline
+        pipeline.run(left[crop], right[crop], max_disp=16, config=args.config)
+    before = _current_rss_mb()
+    start = time.perf_counter()
+    if args.matcher == "vsmatch":
+        disp = pipeline.match(left, right, max_disp=max_disp, config=args.config)
+    else:
+        from .peers import sgbm_fill_from_left
+
+        raw = sgbm_matcher(max_disp, mode=SGBM_MODES[args.matcher]).compute(left, right)
+        disp = sgbm_fill_from_left(raw)
+    seconds = time.perf_counter() - start
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    threshold = 2.0 * args.factor
+    print(json.dumps({"matcher": args.matcher, "factor": args.factor,
+                      "size": [left.shape[1], left.shape[0]], "levels": max_disp + 1,
+                      "seconds": seconds, "peak_mb": peak, "before_match_mb": before,
+                      "threshold": threshold,
+                      "bad_nonocc": bad_percent(disp, gt, mask, threshold)}))
+
+
 def run_benchmark(data_root=None, config: str | None = None, repeats: int = 5,
-                  cold: bool = True, scaling: bool = True) -> dict[str, Any]:
+                  cold: bool = True, size: bool = True) -> dict[str, Any]:
     """Everything :mod:`vsmatch.bench` measures, as one JSON-ready dict."""
     import numba
 
-    scenes = datasets.load_dataset("middlebury2", data_root)
+    scenes = [s for name in STANDARD_DATASETS for s in datasets.load_dataset(name, data_root)]
     folder = datasets.dataset_folder("middlebury2", data_root) / "cones"
     left, right = folder / "imL.png", folder / "imR.png"
     cones_disp = datasets.middlebury2.SCENES["cones"][1]
@@ -172,8 +245,9 @@ def run_benchmark(data_root=None, config: str | None = None, repeats: int = 5,
         "memory_cones": memory(left, right, cones_disp, config)}
     if cold:
         report["cold_start_cones"] = cold_start(left, right, cones_disp, config)
-    if scaling:
-        report["scaling"] = memory(left, right, SCALING_LEVELS - 1, config, SCALING_FACTOR)
+    if size:
+        report["size"] = [size_run(data_root, matcher, factor, config)
+                          for factor in SIZE_FACTORS for matcher in SIZE_MATCHERS]
     return report
 
 
@@ -207,17 +281,24 @@ def format_report(report: dict[str, Any]) -> str:
         lines.append(f"first call in a fresh process (a small crop): empty compilation cache "
                      f"{cold['empty_cache']['first_call_seconds']:.1f} s, cache filled "
                      f"{cold['warm_cache']['first_call_seconds']:.2f} s")
-    if "scaling" in report:
-        sc = report["scaling"]
-        lines.append(f"scaling, cones x{SCALING_FACTOR} ({sc['size'][0]}x{sc['size'][1]}, "
-                     f"{sc['levels']} disparities): {sc['match_seconds']:.1f} s")
-        lines.append(_memory_line("scaling", sc))
+    if "size" in report:
+        lines += ["", f"size series: {SIZE_SCENE} upscaled (bicubic), each in a child process",
+                  f"{'factor':<8}{'size':>11}{'levels':>8}{'matcher':>10}{'seconds':>9}"
+                  f"{'peak MB':>9}{'bad':>8}"]
+        for run in report["size"]:
+            lines.append(f"{run['factor']:<8}{run['size'][0]:>6}x{run['size'][1]:<4}"
+                         f"{run['levels']:>8}{run['matcher']:>10}{run['seconds']:9.2f}"
+                         f"{run['peak_mb']:9.0f}{run['bad_nonocc']:8.2f}")
+        lines.append("bad = % of non-occluded pixels off by more than 2 x factor")
     return "\n".join(lines) + "\n"
 
 
 if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "match":
         _child_match(sys.argv[2:])
+    elif len(sys.argv) > 1 and sys.argv[1] == "size":
+        _child_size(sys.argv[2:])
     else:
         sys.exit("usage: python -m vsmatch.bench match LEFT RIGHT MAX_DISP [--config C] "
-                 "[--scale N]  (the CLI entry is 'vsmatch bench')")
+                 "[--scale N] | size --matcher M --factor F  (the CLI entry is "
+                 "'vsmatch bench')")

@@ -416,18 +416,22 @@ def _check_output_folder(path: Path) -> Path:
               help="Timed runs per pair; the median is reported.")
 @click.option("--no-cold", is_flag=True, help="Skip the empty-cache start-up run "
               "(it compiles every kernel, about 15 s).")
-@click.option("--no-scaling", is_flag=True, help="Skip the 3x upsampled cones run.")
+@click.option("--no-size", is_flag=True, help="Skip the size series (Adirondack 1x, 2x, "
+              "4x; the 4x runs need about 14 GB and a few minutes).")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help="Write the measurements as JSON here.")
 @click.pass_context
 @friendly_errors
-def bench_command(ctx, data_root, config, repeats, no_cold, no_scaling, json_path):
-    """Time vsmatch against OpenCV StereoSGBM (mode HH, block size 3) on middlebury2.
+def bench_command(ctx, data_root, config, repeats, no_cold, no_size, json_path):
+    """Time vsmatch against OpenCV StereoSGBM (block size 3) on the standard pairs and
+    at size.
 
-    Per-stage and total times on the four pairs, SGBM timed in the same process on the
-    same images, and their ratio; start-up with an empty and a warm compilation cache;
-    the whole 'vsmatch run' command; peak memory; a scaling run on cones upsampled 3x
-    (1350x1125, 180 disparities).
+    Per-stage and total times on the twelve standard pairs (middlebury2 and Middlebury
+    2014 at quarter size), SGBM HH timed in the same process on the same images, and
+    their ratio; start-up with an empty and a warm compilation cache; the whole 'vsmatch
+    run' command; peak memory; the size series: Adirondack upscaled 1x, 2x and 4x
+    (2872x1984, 292 disparities), vsmatch against SGBM's 5-direction and HH modes, with
+    time, peak memory and accuracy.
     """
     from . import bench
 
@@ -435,7 +439,7 @@ def bench_command(ctx, data_root, config, repeats, no_cold, no_scaling, json_pat
         _check_output_folder(Path(json_path))
     load_config(config)
     report = bench.run_benchmark(data_root, config, repeats, cold=not no_cold,
-                                 scaling=not no_scaling)
+                                 size=not no_size)
     _echo(ctx, bench.format_report(report))
     if json_path is not None:
         io.write_text_atomic(json_path, json.dumps(report, indent=2) + "\n")

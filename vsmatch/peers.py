@@ -25,10 +25,16 @@ def sgbm_matcher(max_disp: int, channels: int = 3, *, min_disp: int = 0,
 def sgbm_disparity(left: np.ndarray, right: np.ndarray, *, max_disp: int,
                    min_disp: int = 0) -> np.ndarray:
     """SGBM's left disparity (float32) with its holes filled from the left, as in
-    EVALUATION.md: each invalid pixel takes the nearest valid disparity to its left.
-    What has no valid pixel to its left (SGBM's empty left margin) stays invalid."""
+    EVALUATION.md (see :func:`sgbm_fill_from_left`)."""
     channels = 1 if left.ndim == 2 else left.shape[2]
     raw = sgbm_matcher(max_disp, channels, min_disp=min_disp).compute(left, right)
+    return sgbm_fill_from_left(raw, min_disp)
+
+
+def sgbm_fill_from_left(raw: np.ndarray, min_disp: int = 0) -> np.ndarray:
+    """SGBM's fixed-point output (16 x d) as float32 disparities, each invalid pixel
+    taking the nearest valid disparity to its left; what has no valid pixel to its left
+    (SGBM's empty left margin) stays invalid."""
     disp = raw.astype(np.float32) / 16.0
     valid = raw >= (min_disp * 16)
     last_valid = np.maximum.accumulate(np.where(valid, np.arange(disp.shape[1]), -1), axis=1)
