@@ -66,3 +66,13 @@ def test_size_child_reports_time_memory_and_accuracy(data_dir):
     assert report["size"] == [718, 496] and report["levels"] == 73
     assert report["threshold"] == 2.0 and 5 < report["bad_nonocc"] < 40
     assert report["peak_mb"] >= report["before_match_mb"] > 0 and report["seconds"] > 0
+
+
+def test_a_child_does_not_report_its_parents_memory():
+    import numpy as np
+
+    held = np.ones((400, 1024, 1024), np.uint8)  # this process: 400 MB more
+    code = "from vsmatch import bench; print(bench._peak_rss_mb())"
+    peak = float(subprocess.run([sys.executable, "-c", code], capture_output=True,
+                                text=True, check=True).stdout)
+    assert 0 < peak < 300 and held.sum() > 0

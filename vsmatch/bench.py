@@ -117,6 +117,19 @@ def memory(left: Path, right: Path, max_disp: int, config: str | None,
     return _run_child(args)
 
 
+def _peak_rss_mb() -> float:
+    """Peak resident memory of this process (Linux: VmHWM). Not ru_maxrss: a child started
+    by a large parent can report the parent's size there."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024.0
+    except (OSError, ValueError, IndexError):
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
 def _current_rss_mb() -> float:
     """Resident memory now (Linux), else the peak so far."""
     try:
@@ -155,7 +168,7 @@ def _child_match(argv: list[str]) -> None:
     ready = time.perf_counter()
     result = pipeline.run(left, right, max_disp=args.max_disp, config=args.config)
     done = time.perf_counter()
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    peak = _peak_rss_mb()
     volume_mb = left.shape[0] * left.shape[1] * (args.max_disp + 1) * 4 / 2 ** 20
     print(json.dumps({"size": [left.shape[1], left.shape[0]], "levels": args.max_disp + 1,
                       "first_call_seconds": first_call,
@@ -219,7 +232,7 @@ def _child_size(argv: list[str]) -> None:
         raw = sgbm_matcher(max_disp, mode=SGBM_MODES[args.matcher]).compute(left, right)
         disp = sgbm_fill_from_left(raw)
     seconds = time.perf_counter() - start
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    peak = _peak_rss_mb()
     threshold = 2.0 * args.factor
     print(json.dumps({"matcher": args.matcher, "factor": args.factor,
                       "size": [left.shape[1], left.shape[0]], "levels": max_disp + 1,
