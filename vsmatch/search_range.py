@@ -7,7 +7,7 @@ Two estimates of the largest disparity, each robust where the other is weak:
   their 99.5th percentile. Exposure changes do not fool it, but it misses near objects
   without corners;
 - dense: vsmatch itself on the pair reduced to about 200 columns, searching half the
-  width, the 99th percentile of the pixels that pass the left-right check. It sees
+  width, the 99.5th percentile of the pixels that pass the left-right check. It sees
   near surfaces without corners, but can lock onto wrong matches under lighting changes,
   so it may only raise the sparse estimate by :data:`DENSE_MAX_GAIN` at most, and is
   not used alone (a blank pair passes its check at every disparity).
@@ -39,7 +39,7 @@ AGREE_PIXELS, AGREE_SHARE = 2.0, 0.1
 SPARSE_PERCENTILE = 99.5
 #: The dense check runs at about this many columns.
 DENSE_WIDTH = 200
-DENSE_PERCENTILE = 99.0
+DENSE_PERCENTILE = 99.5
 DENSE_MIN_VALID = 0.1  # share of pixels passing the left-right check, else ignored
 DENSE_MAX_GAIN = 1.5
 MARGIN_FACTOR = 1.3
