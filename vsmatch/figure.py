@@ -34,7 +34,9 @@ def results_figure(scenes: list[Scene], report: dict[str, Any],
     rows = []
     for scene in scenes:
         gt = np.where(scene.ground_truth > 0, scene.ground_truth, np.inf).astype(np.float32)
-        top = max(scene.max_disp, 1)
+        # Colours span the true disparities, not the search range (KITTI searches 0..191
+        # for disparities up to about 80).
+        top = float(scene.ground_truth.max()) or float(max(scene.max_disp, 1))
         tiles = [scene.left, colour_disparity(gt, top)]
         mask = headline_mask(scene)
         for method in methods:
