@@ -37,6 +37,16 @@ class Scoring:
     metric: str  # the headline measure's name: "bad1.0", "bad2.0", "D1", "out3"
     threshold: float  # its error threshold in pixels
 
+    @classmethod
+    def bad(cls, threshold: float) -> Scoring:
+        """Middlebury scoring with bad-``threshold`` as the headline."""
+        return cls(metrics.bad_name(threshold), float(threshold))
+
+    @classmethod
+    def of_report(cls, report: dict[str, Any]) -> Scoring:
+        """The scoring a report was made with (bad 1.0 when it names none)."""
+        return cls(report.get("metric", "bad1.0"), report.get("threshold", 1.0))
+
     @property
     def kitti(self) -> bool:
         return not self.metric.startswith("bad")
@@ -66,7 +76,7 @@ def scoring_for(dataset: str, threshold: float | None = None) -> Scoring:
         return Scoring(spec.metric, 3.0)
     if threshold is None:
         threshold = spec.threshold if spec is not None else 1.0
-    return Scoring(metrics.bad_name(threshold), float(threshold))
+    return Scoring.bad(threshold)
 
 
 def score_scene(disp: np.ndarray, scene: Scene,
@@ -76,7 +86,7 @@ def score_scene(disp: np.ndarray, scene: Scene,
     ``scoring`` may be a bare bad-x threshold (Middlebury scoring).
     """
     if not isinstance(scoring, Scoring):
-        scoring = Scoring(metrics.bad_name(scoring), float(scoring))
+        scoring = Scoring.bad(scoring)
     per_mask = {m: scoring.measures(disp, scene.ground_truth, mask)
                 for m, mask in scene.masks.items()}
     out: dict[str, Any] = {m: per_mask[m].get(scoring.metric, float("nan"))
@@ -269,7 +279,7 @@ def evaluate_noise(scenes: list[Scene], methods: dict, report: dict[str, Any], *
     averages of the report's headline measure (bad 1.0 when it names none), under
     ``"noise": {"<level>": {"avg": ..., "per_seed": [...]}}``.
     """
-    scoring = Scoring(report.get("metric", "bad1.0"), report.get("threshold", 1.0))
+    scoring = Scoring.of_report(report)
     for name, method in methods.items():
         run_method, _ = method_runner(method)
         noise = {}

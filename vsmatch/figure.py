@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from .datasets import Scene
-from .evaluation import headline_mask, scoring_for
+from .evaluation import Scoring, headline_mask
 from .io import colour_disparity, error_image
 
 #: Height of a row, pixels; each tile keeps its scene's aspect ratio.
@@ -25,8 +25,7 @@ GAP = 4
 def results_figure(scenes: list[Scene], report: dict[str, Any],
                    disparities: dict) -> np.ndarray:
     """The figure as a BGR uint8 image; ``disparities[(method, scene)]`` from evaluate."""
-    scoring = scoring_for(report["dataset"], report["threshold"]
-                          if report["metric"].startswith("bad") else None)
+    scoring = Scoring.of_report(report)
     methods = list(report["methods"])
     titles = ["left view", "ground truth"]
     for method in methods:

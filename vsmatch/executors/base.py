@@ -28,6 +28,19 @@ class Executor:
         raise NotImplementedError
 
 
+def describe_error(exc: BaseException) -> str:
+    """One line for a failure: the exception's type and its message."""
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def use_threads(threads: int) -> None:
+    """Numba's thread count for the calling thread, within what it was started with."""
+    import numba
+
+    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+
+
 def share_of_cores(workers: int) -> int:
     """Numba threads for each of ``workers`` processes on this machine."""
     import os

@@ -13,7 +13,7 @@ import functools
 import logging
 import os
 
-from .base import Executor, ExecutorError, share_of_cores
+from .base import Executor, ExecutorError, describe_error, share_of_cores, use_threads
 
 INSTALL_HINT = "pip install 'vsmatch[cluster]'"
 
@@ -63,9 +63,7 @@ def _local_cluster(distributed, workers: int):
 
 def _with_threads(fn, threads: int, item):
     """``fn(item)`` with Numba using ``threads`` threads in this (worker) thread."""
-    import numba
-
-    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    use_threads(threads)
     return fn(item)
 
 
@@ -87,7 +85,7 @@ class ClusterExecutor(Executor):
             self.close()
             what = ("could not start a local Dask cluster" if workers is not None
                     else f"cannot reach the Dask scheduler at {scheduler}")
-            raise ExecutorError(f"{what} ({_reason(exc)})") from None
+            raise ExecutorError(f"{what} ({describe_error(exc)})") from None
 
     def close(self) -> None:
         for part in (getattr(self, "_client", None), self._cluster):
@@ -112,17 +110,12 @@ class ClusterExecutor(Executor):
                 try:
                     result = future.result()
                 except lost as exc:
-                    raise ExecutorError(f"lost the Dask cluster ({_reason(exc)}); outputs "
+                    raise ExecutorError(f"lost the Dask cluster ({describe_error(exc)}); outputs "
                                         "written so far are complete") from None
                 except distributed.KilledWorker:
                     result = "every worker that ran it died (out of memory?)"
                 except Exception as exc:  # noqa: BLE001 - a failed task, not a failed batch
-                    result = _reason(exc)
+                    result = describe_error(exc)
                 yield index[future.key], result
         finally:
             self._client.cancel(futures)
-
-
-def _reason(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__

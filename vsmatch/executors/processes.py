@@ -6,20 +6,14 @@ import multiprocessing
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 
-from .base import Executor, ExecutorError, share_of_cores
-
-
-def _init_worker(threads: int) -> None:
-    import numba
-
-    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+from .base import Executor, ExecutorError, describe_error, share_of_cores, use_threads
 
 
 class ProcessExecutor(Executor):
     def __init__(self, workers: int):
         # Fresh interpreters, not forks: forking a process whose Numba thread pool is
         # running can kill the child.
-        self._pool = ProcessPoolExecutor(max_workers=workers, initializer=_init_worker,
+        self._pool = ProcessPoolExecutor(max_workers=workers, initializer=use_threads,
                                          initargs=(share_of_cores(workers),),
                                          mp_context=multiprocessing.get_context("spawn"))
 
@@ -36,7 +30,7 @@ class ProcessExecutor(Executor):
                     raise ExecutorError("a worker process died (out of memory?); outputs "
                                         "written so far are complete") from None
                 except Exception as exc:  # noqa: BLE001 - a failed task, not a failed batch
-                    result = f"{type(exc).__name__}: {exc}"
+                    result = describe_error(exc)
                 yield futures[future], result
         finally:
             for future in futures:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .base import Executor
+from .base import Executor, describe_error
 
 
 class SerialExecutor(Executor):
@@ -11,5 +11,5 @@ class SerialExecutor(Executor):
             try:
                 result = fn(item)
             except Exception as exc:  # noqa: BLE001 - a failed task, not a failed batch
-                result = f"{type(exc).__name__}: {exc}"
+                result = describe_error(exc)
             yield item, result
