@@ -145,6 +145,28 @@ class SubpixelConfig:
 
 
 @dataclass(frozen=True)
+class PyramidConfig:
+    """Coarse-to-fine search (``vsmatch.pyramid``): halve the views while a row holds more
+    than ``max_row_cells`` width x disparity cells; at each finer level search the coarse
+    estimate's 3 x 3 range widened by ``band``, summing costs over crosses with arms of at
+    most ``support`` pixels."""
+
+    max_row_cells: int = _param(262144, 1024, 1 << 40)
+    band: int = _param(2, 0, 64)
+    support: int = _param(8, 1, 255)
+
+
+@dataclass(frozen=True)
+class MemoryConfig:
+    """Working memory of the full search: with more than ``max_mb`` megabytes of cost
+    volumes and per-pixel arrays, it runs on horizontal stripes that fit, each with
+    ``overlap`` extra rows above and below whose results are dropped."""
+
+    max_mb: int = _param(1024, 16, 1 << 20)
+    overlap: int = _param(48, 0, 4096)
+
+
+@dataclass(frozen=True)
 class Config:
     """All parameters of the method, one section per pipeline stage."""
 
@@ -158,6 +180,8 @@ class Config:
     fill: FillConfig = field(default_factory=FillConfig)
     discontinuity: DiscontinuityConfig = field(default_factory=DiscontinuityConfig)
     subpixel: SubpixelConfig = field(default_factory=SubpixelConfig)
+    pyramid: PyramidConfig = field(default_factory=PyramidConfig)
+    memory: MemoryConfig = field(default_factory=MemoryConfig)
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
         return dataclasses.asdict(self)

@@ -49,12 +49,12 @@ def max_cost(cfg: CostConfig) -> float:
 GRADIENT_STEPS = 4
 
 
-def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
-                census_l: np.ndarray, census_r: np.ndarray,
-                grad_l: np.ndarray, grad_r: np.ndarray,
-                *, n_disp: int, cfg: CostConfig) -> np.ndarray:
-    """The matching cost volume ``(H, W, n_disp)`` float32 (ALGORITHM.md §2)."""
-    height, width = census_l.shape
+def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
+               census_l: np.ndarray, census_r: np.ndarray,
+               grad_l: np.ndarray, grad_r: np.ndarray, cfg: CostConfig) -> tuple:
+    """The arguments the cost kernels take after the output: each view's census, quantised
+    gradient and colour (the right view's reversed along x), the three lookup tables (an
+    empty one switches its term off) and the maximum cost."""
     n_bits = cfg.census_width * cfg.census_height - 1
     census_table = rho(np.arange(n_bits + 1), cfg.lambda_census).astype(np.float32)
     colour_l = as_channels(colour_l).astype(np.int16)
@@ -72,8 +72,17 @@ def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
         channels = colour_l.shape[2]
         ad_table = rho(np.arange(255 * channels + 1) / channels, cfg.lambda_ad).astype(
             np.float32)
-    out = np.empty((height, width, n_disp), dtype=np.float32)
-    matching_cost_volume(census_l, mirrored(census_r, axis=1), q_l, mirrored(q_r, axis=1),
-                         colour_l, mirrored(colour_r, axis=1), census_table, grad_table,
-                         ad_table, np.float32(max_cost(cfg)), out)
+    return (census_l, mirrored(census_r, axis=1), q_l, mirrored(q_r, axis=1),
+            colour_l, mirrored(colour_r, axis=1), census_table, grad_table, ad_table,
+            np.float32(max_cost(cfg)))
+
+
+def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
+                census_l: np.ndarray, census_r: np.ndarray,
+                grad_l: np.ndarray, grad_r: np.ndarray,
+                *, n_disp: int, cfg: CostConfig) -> np.ndarray:
+    """The matching cost volume ``(H, W, n_disp)`` float32 (ALGORITHM.md §2)."""
+    out = np.empty(census_l.shape + (n_disp,), dtype=np.float32)
+    matching_cost_volume(*cost_terms(colour_l, colour_r, census_l, census_r, grad_l, grad_r,
+                                     cfg), out)
     return out

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import aggregation, cost, disparity, noise, optimization, refinement, sensitivity
+from . import (aggregation, cost, disparity, noise, optimization, pyramid, refinement,
+               sensitivity)
 from .config import Config, load_config
 from .disparity import INVALID_DISPARITY
 from .images import to_grey
@@ -111,7 +114,101 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0
 
 def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
                    cfg: Config) -> MatchResult:
-    """The stages in order, for disparities ``0 .. max_disp``."""
+    """Disparities ``0 .. max_disp``: coarse-to-fine when a row is too wide a search."""
+    levels = pyramid.coarse_levels(left.shape[1], max_disp + 1, cfg.pyramid.max_row_cells)
+    return _coarse_to_fine(left, right, max_disp, cfg, levels)
+
+
+def _coarse_to_fine(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
+                    levels: int) -> MatchResult:
+    """The full search ``levels`` pyramid levels down, then a band search at each level up."""
+    if levels == 0:
+        return _full_search_in_stripes(left, right, max_disp, cfg)
+    small_l, small_r = pyramid.downsample(left), pyramid.downsample(right)
+    coarse_max = min(pyramid.coarse_range(max_disp), small_l.shape[1] - 1)
+    coarse = _coarse_to_fine(small_l, small_r, coarse_max, cfg, levels - 1)
+    seconds = dict(coarse.seconds)
+    start = time.perf_counter()
+    result = pyramid.refine(left, right, coarse.disparity, coarse.labels, max_disp, cfg)
+    seconds["refine"] = seconds.get("refine", 0.0) + time.perf_counter() - start
+    if cfg.subpixel.median:
+        start = time.perf_counter()
+        result = refinement.median3(result)
+        seconds["median"] = seconds.get("median", 0.0) + time.perf_counter() - start
+    labels = None
+    if coarse.labels is not None:
+        labels = pyramid.upsample_nearest(coarse.labels, left.shape[:2])
+    return MatchResult(disparity=result, labels=labels, seconds=seconds, config=coarse.config,
+                       noise_sigma=coarse.noise_sigma)
+
+
+#: Bytes per pixel of the full search besides its two float32 cost volumes (census, arms,
+#: gradients, maps; measured: 2.2 x the cost volume on cones, 60 disparities).
+PIXEL_BYTES = 64
+
+
+def stripe_rows(width: int, n_disp: int, cfg: Config) -> int:
+    """The most rows the full search may take at once within ``memory.max_mb``."""
+    row_bytes = width * (8 * n_disp + PIXEL_BYTES)
+    rows = cfg.memory.max_mb * 2**20 // row_bytes
+    if rows < 2 * cfg.memory.overlap + 16:
+        need = math.ceil((2 * cfg.memory.overlap + 16) * row_bytes / 2**20)
+        raise ValueError(f"a memory budget of {cfg.memory.max_mb} MB is too small for rows of "
+                         f"{width} pixels x {n_disp} disparities; allow at least {need} MB")
+    return int(rows)
+
+
+def stripe_layout(height: int, rows: int, overlap: int) -> list[tuple[int, int, int, int]]:
+    """``(first, stop, core_first, core_stop)`` row ranges of stripes of at most ``rows``
+    rows: cores of equal height that tile the image, each with ``overlap`` rows more on
+    either side where the image has them."""
+    if height <= rows:
+        return [(0, height, 0, height)]
+    count = math.ceil(height / (rows - 2 * overlap))
+    core = math.ceil(height / count)
+    layout = []
+    for i in range(count):
+        core_first, core_stop = i * core, min(height, (i + 1) * core)
+        layout.append((max(0, core_first - overlap), min(height, core_stop + overlap),
+                       core_first, core_stop))
+    return layout
+
+
+def _full_search_in_stripes(left: np.ndarray, right: np.ndarray, max_disp: int,
+                            cfg: Config) -> MatchResult:
+    """:func:`_full_search` on horizontal stripes that fit ``memory.max_mb``.
+
+    The layout depends on the image size, the range and the config only, so results are
+    the same on any machine; they differ from one piece near the seams (README).
+    """
+    height, width = left.shape[:2]
+    layout = stripe_layout(height, stripe_rows(width, max_disp + 1, cfg), cfg.memory.overlap)
+    if len(layout) == 1:
+        return _full_search(left, right, max_disp, cfg)
+    noise_sigma = None
+    if cfg.noise.adapt:  # once for the whole pair, as in one piece
+        noise_sigma = 0.5 * (noise.estimate_noise(left) + noise.estimate_noise(right))
+        cfg = noise.adapt_to_noise(cfg, noise_sigma)
+        cfg = dataclasses.replace(cfg, noise=dataclasses.replace(cfg.noise, adapt=False))
+    disp = np.empty((height, width), dtype=np.float32)
+    labels = None
+    seconds: dict[str, float] = {}
+    for first, stop, core_first, core_stop in layout:
+        part = _full_search(left[first:stop], right[first:stop], max_disp, cfg)
+        disp[core_first:core_stop] = part.disparity[core_first - first:core_stop - first]
+        if part.labels is not None:
+            if labels is None:
+                labels = np.empty((height, width), dtype=np.uint8)
+            labels[core_first:core_stop] = part.labels[core_first - first:core_stop - first]
+        for name, value in part.seconds.items():
+            seconds[name] = seconds.get(name, 0.0) + value
+    return MatchResult(disparity=disp, labels=labels, seconds=seconds, config=cfg,
+                       noise_sigma=noise_sigma)
+
+
+def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
+                 cfg: Config) -> MatchResult:
+    """The stages in order, every pixel searching disparities ``0 .. max_disp``."""
     n_disp = int(max_disp) + 1
     seconds: dict[str, float] = {}
 

@@ -1,0 +1,140 @@
+"""Coarse-to-fine search: the full search on a reduced image, a narrow band per pixel above.
+
+Work and memory of the full search grow as width x height x disparities. Where a row holds
+more than ``pyramid.max_row_cells`` width x disparity cells, the views are halved
+(``cv2.pyrDown``) until it does not; the whole method runs there, and each finer level
+searches only the disparities around the upsampled coarser estimate: from twice the
+smallest to twice the largest coarse disparity of the 3 x 3 coarse neighbourhood, widened
+by ``pyramid.band`` (so both sides of a depth edge stay candidates). The cost of a
+candidate is summed over the pixel's cross (arms capped at ``pyramid.support`` pixels of
+its level), from census, gradient and colour terms computed on the fly. Every parameter is
+measured in pixels of the level it runs on.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import cv2
+import numpy as np
+
+from . import aggregation, cost, noise, sensitivity
+from ._kernels.band import search_band
+from .config import Config
+from .disparity import VALID
+from .images import to_grey
+
+#: Rows refined at a time at a fine level. The result does not depend on it (every pixel
+#: reads only its cross, inside the margin); it bounds the memory of the per-pixel arrays.
+REFINE_ROWS = 256
+
+
+def coarse_levels(width: int, n_disp: int, max_row_cells: int) -> int:
+    """How many times to halve a pair before the full search."""
+    levels = 0
+    while width * n_disp > max_row_cells and width >= 64 and n_disp >= 16:
+        width, n_disp = (width + 1) // 2, coarse_range(n_disp - 1) + 1
+        levels += 1
+    return levels
+
+
+def coarse_range(max_disp: int) -> int:
+    """The largest disparity searched one level down."""
+    return int(math.ceil(max_disp / 2))
+
+
+def downsample(image: np.ndarray) -> np.ndarray:
+    """One pyramid level down: Gaussian 5 x 5, every other row and column."""
+    return cv2.pyrDown(image)
+
+
+def upsample_nearest(array: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Each fine pixel (y, x) takes coarse pixel (y // 2, x // 2)."""
+    rows = np.minimum(np.arange(shape[0]) // 2, array.shape[0] - 1)
+    cols = np.minimum(np.arange(shape[1]) // 2, array.shape[1] - 1)
+    return array[rows[:, None], cols[None, :]]
+
+
+def coarse_extremes(coarse: np.ndarray, coarse_labels: np.ndarray | None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest and largest valid coarse disparity of each pixel's 3 x 3 neighbourhood
+    (float32; inf and -inf where there is none).
+
+    Where the coarse level rejected the pixel (occluded or mismatched, then filled), its
+    own filled value only: the neighbours' disparities there are mostly the occluder's.
+    """
+    valid = np.isfinite(coarse)
+    kernel = np.ones((3, 3), np.uint8)
+    low = cv2.erode(np.where(valid, coarse, np.inf).astype(np.float32), kernel,
+                    borderType=cv2.BORDER_REPLICATE)
+    high = cv2.dilate(np.where(valid, coarse, -np.inf).astype(np.float32), kernel,
+                      borderType=cv2.BORDER_REPLICATE)
+    if coarse_labels is not None:
+        unsure = (coarse_labels != VALID) & valid
+        low[unsure] = coarse[unsure]
+        high[unsure] = coarse[unsure]
+    low[~valid], high[~valid] = np.inf, -np.inf
+    return low, high
+
+
+def search_bands(low: np.ndarray, high: np.ndarray, rows: slice, width: int,
+                 max_disp: int, band: int) -> tuple[np.ndarray, np.ndarray]:
+    """Disparities to search at the fine rows ``rows``: from twice ``low`` to twice
+    ``high`` (:func:`coarse_extremes`) of the coarse pixel below, widened by ``band``;
+    int32, ``lo > hi`` where there is no estimate."""
+    coarse_rows = np.minimum(np.arange(rows.start, rows.stop) // 2, low.shape[0] - 1)
+    cols = np.minimum(np.arange(width) // 2, low.shape[1] - 1)
+    low = low[coarse_rows[:, None], cols[None, :]]
+    high = high[coarse_rows[:, None], cols[None, :]]
+    none = ~(low <= high)
+    lo = np.clip(np.floor(2.0 * np.where(none, 0, low)) - band, 0, max_disp).astype(np.int32)
+    hi = np.clip(np.ceil(2.0 * np.where(none, 0, high)) + band, 0, max_disp).astype(np.int32)
+    lo[none], hi[none] = 1, 0
+    return lo, hi
+
+
+def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
+           coarse_labels: np.ndarray | None, max_disp: int, cfg: Config) -> np.ndarray:
+    """Disparity at this level (float32), searched in the bands (:func:`search_bands`)
+    around ``coarse``, the disparity one level down, with its left-right labels.
+
+    Noise is estimated and adapted to at this level, as at the coarse one. The work runs
+    in blocks of :data:`REFINE_ROWS` rows with a margin that holds every cross and census
+    window of the block, so the result is the same as in one piece.
+    """
+    if cfg.noise.adapt:
+        sigma = 0.5 * (noise.estimate_noise(left) + noise.estimate_noise(right))
+        cfg = noise.adapt_to_noise(cfg, sigma)
+    if cfg.cost.presmooth_sigma > 0:
+        left = sensitivity.presmooth(left, cfg.cost.presmooth_sigma)
+        right = sensitivity.presmooth(right, cfg.cost.presmooth_sigma)
+    support = cfg.pyramid.support
+    arms_cfg = dataclasses.replace(cfg.arms, l2=min(cfg.arms.l2, support),
+                                   l1=min(cfg.arms.l1, support))
+    census_kw = dict(width=cfg.cost.census_width, height=cfg.cost.census_height,
+                     band=cfg.cost.census_band)
+    margin = support + cfg.cost.census_height // 2 + 1  # + 1: the Sobel row
+    height, width = left.shape[:2]
+    low, high = coarse_extremes(coarse, coarse_labels)
+    out = np.empty((height, width), dtype=np.float32)
+    for top in range(0, height, REFINE_ROWS):
+        bottom = min(height, top + REFINE_ROWS)
+        y0, y1 = max(0, top - margin), min(height, bottom + margin)
+        views = left[y0:y1], right[y0:y1]
+        grey = [to_grey(v) for v in views]
+        grads = [sensitivity.visual_sensitivity(g) for g in grey]
+        census = [cost.census_transform(g, **census_kw) for g in grey]
+        # Arms on the block; the margin keeps them from reaching its edge for the core rows.
+        arms = aggregation.cross_arms(views[0], grads[0][1], grads[0][0], arms_cfg)
+        terms = cost.cost_terms(views[0], views[1], census[0], census[1], grads[0][0],
+                                grads[1][0], cfg.cost)
+        # Only the core rows are searched: margin rows get an empty band.
+        lo_block, hi_block = search_bands(low, high, slice(y0, y1), width, max_disp,
+                                          cfg.pyramid.band)
+        for rows in (slice(0, top - y0), slice(bottom - y0, None)):
+            lo_block[rows], hi_block[rows] = 1, 0
+        block = np.empty((y1 - y0, left.shape[1]), dtype=np.float32)
+        search_band(*terms, arms, lo_block, hi_block, int(max_disp) + 1, block)
+        out[top:bottom] = block[top - y0:bottom - y0]
+    return out
