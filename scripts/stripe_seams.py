@@ -1,11 +1,13 @@
-"""How much do horizontal stripes change the result? (groundwork for bounded memory)
+"""How much do the memory budget's stripes change the result?
 
-Matches each Middlebury 2014 quarter-size scene whole, then in stripes of K rows with O
-rows of overlap on each side (the noise adaptation computed once on the whole pair), and
-prints the share of pixels whose disparity differs by more than 0.5 px and the bad 2.0
-of both. The vertical scanline passes are what stripes cut short.
+Matches each Middlebury 2014 quarter-size scene, and Adirondack upscaled 2x (the level the
+4x pair's full search runs on), in one piece and under smaller ``memory.max_mb`` budgets
+that cut the full search into stripes (``memory.overlap`` rows of overlap), and prints the
+stripe count, the share of pixels whose disparity differs from one piece by more than
+0.5 px, and bad (2 x factor) on non-occluded pixels. The vertical scanline passes and the
+aggregation's vertical arms are what stripes cut short.
 
-    python scripts/stripe_seams.py [--data-root DIR] [--stripes 64:16,128:32,128:64]
+    python scripts/stripe_seams.py [--data-root DIR] [--budgets 128,256] [--overlap 48]
 """
 
 from __future__ import annotations
@@ -14,47 +16,49 @@ import argparse
 
 import numpy as np
 
-from vsmatch import datasets, metrics, noise, pipeline
+from vsmatch import datasets, metrics, pipeline
+from vsmatch.bench import upscaled_scene
 from vsmatch.config import config_from_dict, load_config
-
-
-def striped(scene, rows: int, overlap: int, cfg) -> np.ndarray:
-    height = scene.left.shape[0]
-    out = np.empty(scene.left.shape[:2], np.float32)
-    for top in range(0, height, rows):
-        start, stop = max(0, top - overlap), min(height, top + rows + overlap)
-        disp = pipeline.match(scene.left[start:stop], scene.right[start:stop],
-                              max_disp=scene.max_disp, config=cfg)
-        keep = min(rows, height - top)
-        out[top:top + keep] = disp[top - start:top - start + keep]
-    return out
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data-root", default=None)
-    parser.add_argument("--stripes", default="64:16,64:32,128:16,128:32,128:64")
+    parser.add_argument("--budgets", default="128,256",
+                        help="memory.max_mb values for the quarter-size scenes (MB)")
+    parser.add_argument("--overlap", type=int, default=48)
     args = parser.parse_args()
-    scenes = datasets.load_dataset("middlebury2014-quarter", args.data_root)
     base = load_config(None)
-    whole, fixed = {}, {}
-    for s in scenes:
-        whole[s.name] = pipeline.match(s.left, s.right, max_disp=s.max_disp, config=base)
-        sigma = 0.5 * (noise.estimate_noise(s.left) + noise.estimate_noise(s.right))
-        fixed[s.name] = config_from_dict({"noise": {"adapt": False}},
-                                         base=noise.adapt_to_noise(base, sigma))
+    whole_cfg = config_from_dict({"memory": {"max_mb": 1 << 20}}, base=base)
+    scenes = datasets.load_dataset("middlebury2014-quarter", args.data_root)
+    cases = [(s.name, s.left, s.right, s.ground_truth, s.masks["nonocc"], s.max_disp, 1)
+             for s in scenes]
+    adirondack = next(s for s in scenes if s.name == "Adirondack")
+    left, right, gt, mask, max_disp = upscaled_scene(adirondack, 2)
+    big = [("Adirondack 2x", left, right, gt, mask, max_disp, 2)]
 
-    def bad(disps):
-        return np.mean([metrics.bad_percent(disps[s.name], s.ground_truth,
-                                            s.masks["nonocc"], 2.0) for s in scenes])
-    print(f"whole images: bad 2.0 nonocc {bad(whole):.2f}")
-    for item in args.stripes.split(","):
-        rows, overlap = (int(v) for v in item.split(":"))
-        out = {s.name: striped(s, rows, overlap, fixed[s.name]) for s in scenes}
-        with np.errstate(invalid="ignore"):
-            differ = np.mean([100 * np.mean(~(np.abs(out[n] - whole[n]) <= 0.5)) for n in out])
-        print(f"stripes of {rows} rows, overlap {overlap}: {differ:.2f} % of pixels differ by "
-              f"more than 0.5 px; bad 2.0 nonocc {bad(out):.2f}")
+    def compare(group, budget):
+        cfg = config_from_dict({"memory": {"max_mb": budget, "overlap": args.overlap}},
+                               base=base)
+        differ, bad_whole, bad_striped, counts = [], [], [], []
+        for name, left, right, gt, mask, max_disp, factor in group:
+            one = pipeline.match(left, right, max_disp=max_disp, config=whole_cfg)
+            cut = pipeline.match(left, right, max_disp=max_disp, config=cfg)
+            counts.append(len(pipeline.stripe_layout(
+                left.shape[0], pipeline.stripe_rows(left.shape[1], max_disp + 1, cfg),
+                args.overlap)))
+            with np.errstate(invalid="ignore"):
+                differ.append(100 * np.mean(~(np.abs(cut - one) <= 0.5)))
+            bad_whole.append(metrics.bad_percent(one, gt, mask, 2.0 * factor))
+            bad_striped.append(metrics.bad_percent(cut, gt, mask, 2.0 * factor))
+        print(f"{group[0][0] if len(group) == 1 else 'Middlebury 2014 quarter':<24}"
+              f"{budget:>6} MB {np.mean(counts):7.1f} stripes  {np.mean(differ):5.2f} % differ"
+              f"  bad {np.mean(bad_whole):.2f} -> {np.mean(bad_striped):.2f}")
+
+    print(f"overlap {args.overlap} rows; bad 2 (x factor) nonocc, one piece -> stripes")
+    for budget in (int(b) for b in args.budgets.split(",")):
+        compare(cases, budget)
+    compare(big, base.memory.max_mb)
 
 
 if __name__ == "__main__":

@@ -28,6 +28,8 @@ from .images import to_grey
 #: Rows refined at a time at a fine level. The result does not depend on it (every pixel
 #: reads only its cross, inside the margin); it bounds the memory of the per-pixel arrays.
 REFINE_ROWS = 256
+#: Side of the square tiles whose costs are computed together (see ``search_band``).
+TILE = 16
 
 
 def coarse_levels(width: int, n_disp: int, max_row_cells: int) -> int:
@@ -135,6 +137,6 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
         for rows in (slice(0, top - y0), slice(bottom - y0, None)):
             lo_block[rows], hi_block[rows] = 1, 0
         block = np.empty((y1 - y0, left.shape[1]), dtype=np.float32)
-        search_band(*terms, arms, lo_block, hi_block, int(max_disp) + 1, block)
+        search_band(*terms, arms, lo_block, hi_block, int(max_disp) + 1, support, TILE, block)
         out[top:bottom] = block[top - y0:bottom - y0]
     return out

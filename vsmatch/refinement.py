@@ -18,8 +18,10 @@ def region_vote(disp: np.ndarray, labels: np.ndarray, arms: np.ndarray, *, n_dis
     disp = np.ascontiguousarray(disp, dtype=np.int32)
     labels = labels.copy()
     next_disp, next_labels = np.empty_like(disp), np.empty_like(labels)
+    votes, run_end = np.empty_like(disp), np.empty(disp.shape, dtype=np.int32)
     for _ in range(cfg.iterations):
-        _k.region_vote(disp, labels, arms, int(n_disp), int(cfg.min_votes),
+        _k.vote_runs(disp, labels, votes, run_end)
+        _k.region_vote(disp, labels, votes, run_end, arms, int(n_disp), int(cfg.min_votes),
                        float(cfg.min_share), next_disp, next_labels)
         disp, next_disp = next_disp, disp
         labels, next_labels = next_labels, labels

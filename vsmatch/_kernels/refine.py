@@ -7,13 +7,29 @@ from .disparity import VALID
 
 
 @njit(**KERNEL_OPTIONS)
-def region_vote(disp, labels, arms, n_disp, min_votes, min_share, out_disp, out_labels):
+def vote_runs(disp, labels, votes, run_end):
+    """Runs along each row for :func:`region_vote`: ``votes[y, x]`` is the disparity a
+    pixel votes for (-1: none, it is not VALID) and ``run_end[y, x]`` the column after the
+    last of the run of equal votes that holds (y, x)."""
+    height, width = disp.shape
+    for y in prange(height):
+        for x in range(width):
+            votes[y, x] = disp[y, x] if labels[y, x] == VALID else -1
+        run_end[y, width - 1] = width
+        for x in range(width - 2, -1, -1):
+            run_end[y, x] = run_end[y, x + 1] if votes[y, x] == votes[y, x + 1] else x + 1
+
+
+@njit(**KERNEL_OPTIONS)
+def region_vote(disp, labels, votes, run_end, arms, n_disp, min_votes, min_share, out_disp,
+                out_labels):
     """One round of region voting (Mei et al. 2011).
 
     A rejected pixel takes the most frequent disparity among the VALID pixels of its cross
     support region (its vertical arm, then each of those pixels' horizontal arms) when more
     than ``min_votes`` pixels vote and the winner's share exceeds ``min_share``; it then
-    becomes VALID. Reads the inputs only, so the result is the same on any thread count.
+    becomes VALID. Each row segment is counted run by run (:func:`vote_runs`), not pixel
+    by pixel. Reads the inputs only, so the result is the same on any thread count.
     """
     height, width = disp.shape
     for y in prange(height):
@@ -26,11 +42,15 @@ def region_vote(disp, labels, arms, n_disp, min_votes, min_share, out_disp, out_
             hist[:] = 0
             total = 0
             for yy in range(y - np.int64(arms[UP, y, x]), y + np.int64(arms[DOWN, y, x]) + 1):
-                for xx in range(x - np.int64(arms[LEFT, yy, x]),
-                                x + np.int64(arms[RIGHT, yy, x]) + 1):
-                    if labels[yy, xx] == VALID:
-                        hist[disp[yy, xx]] += 1
-                        total += 1
+                xx = x - np.int64(arms[LEFT, yy, x])
+                stop = x + np.int64(arms[RIGHT, yy, x]) + 1
+                while xx < stop:
+                    end = min(np.int64(run_end[yy, xx]), stop)
+                    vote = votes[yy, xx]
+                    if vote >= 0:
+                        hist[vote] += end - xx
+                        total += end - xx
+                    xx = end
             if total <= min_votes:
                 continue
             best = 0
