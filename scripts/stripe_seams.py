@@ -48,7 +48,7 @@ def main() -> None:
                 left.shape[0], pipeline.stripe_rows(left.shape[1], max_disp + 1, cfg),
                 args.overlap)))
             with np.errstate(invalid="ignore"):
-                differ.append(100 * np.mean(~(np.abs(cut - one) <= 0.5)))
+                differ.append(100 * np.mean(~((cut == one) | (np.abs(cut - one) <= 0.5))))
             bad_whole.append(metrics.bad_percent(one, gt, mask, 2.0 * factor))
             bad_striped.append(metrics.bad_percent(cut, gt, mask, 2.0 * factor))
         print(f"{group[0][0] if len(group) == 1 else 'Middlebury 2014 quarter':<24}"

@@ -16,7 +16,7 @@ from pathlib import Path
 import click
 
 from . import __version__, batch, datasets, evaluation, geometry, io, pipeline, synthetic
-from .config import ConfigError, bundled_config_names, load_config
+from .config import ConfigError, bundled_config_names, config_from_dict, load_config
 from .executors import ExecutorError, make_executor
 from .peers import PEER_METHODS
 
@@ -64,6 +64,20 @@ def config_option(func):
         "--config", "config", default=None, metavar="NAME|PATH",
         help=f"Method parameters: a bundled config ({', '.join(bundled_config_names())}) "
              "or a YAML file. Default: 'default'.")(func)
+
+
+def max_memory_option(func):
+    return click.option(
+        "--max-memory", type=click.IntRange(min=16), default=None, metavar="MB",
+        help="Working-memory budget of the matching in MB (the config's memory.max_mb, "
+             "default 1024); larger images are matched in horizontal stripes.")(func)
+
+
+def _with_budget(cfg, max_memory: int | None):
+    """The config with ``--max-memory`` as its memory budget, if given."""
+    if max_memory is None:
+        return cfg
+    return config_from_dict({"memory": {"max_mb": max_memory}}, base=cfg)
 
 
 def data_root_option(func):
@@ -187,10 +201,11 @@ def _writable(folder: Path) -> bool:
 @click.option("--max-depth", type=click.FloatRange(min=0, min_open=True), default=None,
               help="Leave points farther than this out of the cloud.")
 @config_option
+@max_memory_option
 @click.pass_context
 @friendly_errors
 def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx, cy,
-        doffs, depth_path, cloud_path, max_depth, config):
+        doffs, depth_path, cloud_path, max_depth, config, max_memory):
     """Compute the left-view disparity of a rectified stereo pair.
 
     \b
@@ -211,7 +226,7 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx
     camera = _calibration(calib, focal, baseline, cx, cy, doffs)
     if (depth_path or cloud_path) and camera is None:
         raise click.UsageError("--depth and --cloud need --calib, or --focal and --baseline")
-    cfg = load_config(config)
+    cfg = _with_budget(load_config(config), max_memory)
     left_image, right_image = io.read_pair(left, right)
     width = left_image.shape[1]
     if max_disp is None and camera is not None and camera.ndisp is not None:
@@ -283,6 +298,9 @@ def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
         action = "adapted" if result.noise_sigma > floor else "no adaptation"
         _verbose(ctx, f"estimated noise: {result.noise_sigma:.2f} grey levels "
                       f"(floor {floor:g}: {action})")
+    if result.levels or result.stripes > 1:
+        _verbose(ctx, f"full search {result.levels} pyramid level(s) down, in "
+                      f"{result.stripes} stripe(s)")
     times = ", ".join(f"{k} {v:.3f}" for k, v in result.seconds.items())
     _verbose(ctx, f"seconds: {times}; total {sum(result.seconds.values()):.3f}")
 
@@ -465,9 +483,11 @@ def bench_command(ctx, data_root, config, repeats, no_cold, no_size, json_path):
                    "'vsmatch[cluster]'). Inputs and outputs must be at the same paths on "
                    "every worker.")
 @click.option("--overwrite", is_flag=True, help="Match pairs whose output already exists.")
+@max_memory_option
 @click.pass_context
 @friendly_errors
-def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, overwrite):
+def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, overwrite,
+                  max_memory):
     """Match every pair listed in a CSV file or found in a folder.
 
     \b
@@ -490,7 +510,7 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
     """
     from tqdm import tqdm
 
-    cfg = load_config(config)
+    cfg = _with_budget(load_config(config), max_memory)
     src = Path(source)
     if src.is_dir():
         Path(out_dir).mkdir(parents=True, exist_ok=True)

@@ -26,6 +26,8 @@ class MatchResult:
     seconds: dict[str, float] = field(default_factory=dict)
     config: Config | None = None  # as used, after any noise adaptation
     noise_sigma: float | None = None  # estimated, when noise.adapt is on
+    levels: int = 0  # pyramid levels below the input where the full search ran
+    stripes: int = 1  # stripes the full search ran in
 
 
 def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
@@ -58,6 +60,15 @@ def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
     if max_disp - min_disp >= cropped or cropped < cfg.cost.census_width:
         raise ValueError(f"the range {min_disp}..{max_disp} is too wide for images "
                          f"{width} pixels wide")
+    stripe_rows(*full_search_size(cropped, max_disp - min_disp, cfg), cfg)  # budget enough?
+
+
+def full_search_size(width: int, max_disp: int, cfg: Config) -> tuple[int, int]:
+    """Width and disparity count of the pyramid level where the full search runs."""
+    for _ in range(pyramid.coarse_levels(width, max_disp + 1, cfg.pyramid.max_row_cells)):
+        width = (width + 1) // 2
+        max_disp = min(pyramid.coarse_range(max_disp), width - 1)
+    return width, max_disp + 1
 
 
 def match(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0,
@@ -139,7 +150,8 @@ def _coarse_to_fine(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Con
     if coarse.labels is not None:
         labels = pyramid.upsample_nearest(coarse.labels, left.shape[:2])
     return MatchResult(disparity=result, labels=labels, seconds=seconds, config=coarse.config,
-                       noise_sigma=coarse.noise_sigma)
+                       noise_sigma=coarse.noise_sigma, levels=coarse.levels + 1,
+                       stripes=coarse.stripes)
 
 
 #: Bytes per pixel of the full search besides its two float32 cost volumes (census, arms,
@@ -203,7 +215,7 @@ def _full_search_in_stripes(left: np.ndarray, right: np.ndarray, max_disp: int,
         for name, value in part.seconds.items():
             seconds[name] = seconds.get(name, 0.0) + value
     return MatchResult(disparity=disp, labels=labels, seconds=seconds, config=cfg,
-                       noise_sigma=noise_sigma)
+                       noise_sigma=noise_sigma, stripes=len(layout))
 
 
 def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,

@@ -25,8 +25,9 @@ from .config import Config
 from .disparity import VALID
 from .images import to_grey
 
-#: Rows refined at a time at a fine level. The result does not depend on it (every pixel
-#: reads only its cross, inside the margin); it bounds the memory of the per-pixel arrays.
+#: Rows refined at a time at a fine level, a multiple of TILE. The result does not depend
+#: on it (every pixel reads only its cross, inside the margin); it bounds the memory of
+#: the per-pixel arrays.
 REFINE_ROWS = 256
 #: Side of the square tiles whose costs are computed together (see ``search_band``).
 TILE = 16
@@ -122,7 +123,10 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
     out = np.empty((height, width), dtype=np.float32)
     for top in range(0, height, REFINE_ROWS):
         bottom = min(height, top + REFINE_ROWS)
+        # Blocks start on the tile grid, so every tile sums in the same order as in one
+        # piece (REFINE_ROWS is a multiple of TILE).
         y0, y1 = max(0, top - margin), min(height, bottom + margin)
+        y0 -= y0 % TILE
         views = left[y0:y1], right[y0:y1]
         grey = [to_grey(v) for v in views]
         grads = [sensitivity.visual_sensitivity(g) for g in grey]

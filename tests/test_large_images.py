@@ -1,0 +1,161 @@
+"""Coarse-to-fine search and stripes: the parts that keep large images in bounds."""
+
+import numba
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from vsmatch import cost, datasets, metrics, pipeline, pyramid, sensitivity
+from vsmatch._kernels.band import search_band
+from vsmatch.aggregation import cross_arms
+from vsmatch.bench import upscaled_scene
+from vsmatch.cli import main
+from vsmatch.config import config_from_dict, load_config
+from vsmatch.images import to_grey
+
+from conftest import random_pair
+
+
+def test_levels_halve_until_a_row_fits():
+    assert pyramid.coarse_levels(718, 73, 262144) == 0  # Middlebury 2014 quarter
+    assert pyramid.coarse_levels(1242, 192, 262144) == 0  # KITTI
+    assert pyramid.coarse_levels(2872, 292, 262144) == 1  # the 4x pair
+    assert pyramid.coarse_levels(5744, 584, 262144) == 2
+    assert pyramid.coarse_levels(100, 5000, 1024) == 1  # stops at 64 columns
+
+
+@pytest.mark.parametrize("height, rows, overlap", [(100, 1000, 8), (100, 40, 8), (997, 200, 48),
+                                                   (1984, 575, 48)])
+def test_stripe_cores_tile_the_image(height, rows, overlap):
+    layout = pipeline.stripe_layout(height, rows, overlap)
+    covered = np.zeros(height, int)
+    for first, stop, core_first, core_stop in layout:
+        assert stop - first <= rows
+        assert first == max(0, core_first - overlap) and stop == min(height, core_stop + overlap)
+        covered[core_first:core_stop] += 1
+    assert np.all(covered == 1)
+
+
+def test_too_small_a_budget_is_refused_in_one_line(rng, tmp_path):
+    left, right = random_pair(rng, height=120, width=400, shift=3)
+    cfg = config_from_dict({"memory": {"max_mb": 16}}, base=load_config(None))
+    with pytest.raises(ValueError, match="memory budget of 16 MB is too small .* at least"):
+        pipeline.check_pair(left, right, 49, cfg)
+    import cv2
+    cv2.imwrite(str(tmp_path / "l.png"), left)
+    cv2.imwrite(str(tmp_path / "r.png"), right)
+    out = tmp_path / "d.pfm"
+    res = CliRunner().invoke(main, ["run", str(tmp_path / "l.png"), str(tmp_path / "r.png"),
+                                    "-o", str(out), "--max-disp", "49", "--max-memory", "16"])
+    assert res.exit_code == 1
+    assert "too small" in res.output and len(res.output.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+@pytest.fixture(scope="module")
+def teddy(data_dir):
+    [scene] = datasets.load_dataset("middlebury2014-quarter", data_dir, names=["Teddy"])
+    return scene
+
+
+def test_stripes_agree_with_one_piece_but_near_seams(teddy):
+    """Three stripes (a 60 MB budget) against one piece on a real scene."""
+    s = teddy
+    one = pipeline.run(s.left, s.right, max_disp=s.max_disp, config="default")
+    cfg = config_from_dict({"memory": {"max_mb": 60}}, base=load_config(None))
+    cut = pipeline.run(s.left, s.right, max_disp=s.max_disp, config=cfg)
+    assert one.stripes == 1 and cut.stripes == 3
+    with np.errstate(invalid="ignore"):  # inf - inf where both are invalid
+        differ = ~((cut.disparity == one.disparity)
+                   | (np.abs(cut.disparity - one.disparity) <= 0.5))
+    assert 0 < differ.mean() < 0.02
+    bad_one, bad_cut = (metrics.bad_percent(d, s.ground_truth, s.masks["nonocc"], 2.0)
+                        for d in (one.disparity, cut.disparity))
+    assert abs(bad_cut - bad_one) < 0.3
+
+
+def test_striped_and_pyramid_results_do_not_depend_on_threads(teddy):
+    s = teddy
+    cfg = config_from_dict({"memory": {"max_mb": 60}, "pyramid": {"max_row_cells": 20000}},
+                           base=load_config(None))
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = pipeline.run(s.left, s.right, max_disp=s.max_disp, config=cfg)
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        many = pipeline.run(s.left, s.right, max_disp=s.max_disp, config=cfg)
+    finally:
+        numba.set_num_threads(before)
+    assert one.levels == 1
+    assert one.disparity.tobytes() == many.disparity.tobytes()
+
+
+def test_refine_blocks_do_not_change_the_result(teddy, monkeypatch):
+    s = teddy
+    cfg = load_config(None)
+    coarse = pipeline.run(pyramid.downsample(s.left), pyramid.downsample(s.right),
+                          max_disp=pyramid.coarse_range(s.max_disp), config=cfg)
+    whole = pyramid.refine(s.left, s.right, coarse.disparity, coarse.labels, s.max_disp, cfg)
+    monkeypatch.setattr(pyramid, "REFINE_ROWS", 3 * pyramid.TILE)
+    blocks = pyramid.refine(s.left, s.right, coarse.disparity, coarse.labels, s.max_disp, cfg)
+    assert np.isfinite(whole).all()
+    assert whole.tobytes() == blocks.tobytes()
+
+
+def _band_search_by_hand(volume, arms, lo, hi):
+    """Cross sums of the full cost volume, best d in lo..hi, parabola: slow and plain."""
+    height, width, n_disp = volume.shape
+    out = np.full((height, width), np.inf)
+    for y in range(height):
+        for x in range(width):
+            if lo[y, x] > hi[y, x]:
+                continue
+            l, r, u, d = (int(a) for a in arms[:, y, x])
+            sums = volume[y, x - l:x + r + 1].sum(axis=0) + volume[y - u:y + d + 1, x].sum(
+                axis=0) - volume[y, x]
+            best = lo[y, x] + int(np.argmin(sums[lo[y, x]:hi[y, x] + 1]))
+            out[y, x] = best
+            first, last = max(lo[y, x] - 1, 0), min(hi[y, x] + 1, n_disp - 1)
+            if first < best < last:
+                c0, c1, c2 = sums[best - 1], sums[best], sums[best + 1]
+                if c0 + c2 - 2 * c1 > 1e-9:
+                    out[y, x] = best + np.clip((c0 - c2) / (2 * (c0 + c2 - 2 * c1)), -0.5, 0.5)
+    return out
+
+
+def test_band_search_equals_cross_sums_of_the_cost_volume(rng):
+    left, right = random_pair(rng, height=37, width=45, shift=4)
+    cfg = load_config(None)
+    n_disp = 12
+    grey_l, grey_r = to_grey(left), to_grey(right)
+    grad_l, theta_l = sensitivity.visual_sensitivity(grey_l)
+    grad_r, _ = sensitivity.visual_sensitivity(grey_r)
+    census_l, census_r = (cost.census_transform(g, width=9, height=7) for g in (grey_l, grey_r))
+    volume = cost.cost_volume(left, right, census_l, census_r, grad_l, grad_r, n_disp=n_disp,
+                              cfg=cfg.cost).astype(np.float64)
+    arms_cfg = config_from_dict({"arms": {"l1": 3, "l2": 5, "tau1": 255, "tau2": 255}},
+                                base=cfg).arms
+    arms = cross_arms(left, theta_l, grad_l, arms_cfg)
+    lo = rng.integers(0, n_disp, size=(37, 45)).astype(np.int32)
+    hi = np.minimum(lo + rng.integers(-1, 6, size=(37, 45)), n_disp - 1).astype(np.int32)
+    out = np.empty((37, 45), np.float32)
+    search_band(*cost.cost_terms(left, right, census_l, census_r, grad_l, grad_r, cfg.cost),
+                arms, lo, hi, n_disp, 5, 16, out)
+    expected = _band_search_by_hand(volume, arms, lo, hi)
+    assert np.array_equal(np.isinf(out), lo > hi)
+    both = lo <= hi
+    assert np.mean(np.floor(out[both] + 0.5) == np.floor(expected[both] + 0.5)) > 0.99
+    assert np.median(np.abs(out[both] - expected[both])) < 1e-4
+
+
+def test_coarse_to_fine_on_an_upscaled_pair_is_accurate(data_dir):
+    """Adirondack at twice the quarter size: the full search a level down, a band above."""
+    [scene] = datasets.load_dataset("middlebury2014-quarter", data_dir, names=["Adirondack"])
+    left, right, gt, mask, max_disp = upscaled_scene(scene, 2)
+    cfg = config_from_dict({"pyramid": {"max_row_cells": 100000}}, base=load_config(None))
+    result = pipeline.run(left, right, max_disp=max_disp, config=cfg)
+    assert result.levels == 1 and result.labels.shape == left.shape[:2]
+    assert metrics.bad_percent(result.disparity, gt, mask, 4.0) < BAD4_2X_LIMIT
+
+
+BAD4_2X_LIMIT = 6.0
