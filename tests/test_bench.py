@@ -66,6 +66,14 @@ def test_size_child_reports_time_memory_and_accuracy(data_dir):
     assert report["size"] == [718, 496] and report["levels"] == 73
     assert report["threshold"] == 2.0 and 5 < report["bad_nonocc"] < 40
     assert report["peak_mb"] >= report["before_match_mb"] > 0 and report["seconds"] > 0
+    tall = subprocess.run([sys.executable, "-m", "vsmatch.bench", "size", "--matcher",
+                           "sgbm-5", "--factor", "1", "--tall", "--data-root", str(data_dir)],
+                          capture_output=True, text=True)
+    assert tall.returncode == 0, tall.stderr
+    tall_report = json.loads(tall.stdout.splitlines()[-1])
+    assert tall_report["size"] == [718, 992] and tall_report["tall"] is True
+    # The lower half is the upper one upside down: the same errors, the same share.
+    assert abs(tall_report["bad_nonocc"] - report["bad_nonocc"]) < 1.0
 
 
 def test_a_child_does_not_report_its_parents_memory():

@@ -8,7 +8,8 @@ processes: a first call with an empty compilation cache, the whole ``vsmatch run
 with a warm cache, the peak resident memory of a pair, and the size series: Adirondack
 (Middlebury 2014) upscaled 1x, 2x and 4x (bicubic; ground truth x factor, nearest), matched
 by vsmatch and by SGBM in its 5-direction and HH modes, with time, peak memory and bad
-(2 x factor) on the non-occluded pixels.
+(2 x factor) on the non-occluded pixels, and vsmatch on the 4x pair with its upside-down
+copy below it (twice as tall: does memory grow with the height?).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import cv2
+import numpy as np
 
 from . import datasets, pipeline
 from .peers import sgbm_matcher
@@ -177,11 +179,13 @@ def _child_match(argv: list[str]) -> None:
                       "cost_volume_mb": volume_mb, "stages": result.seconds}))
 
 
-def size_run(data_root, matcher: str, factor: int, config: str | None) -> dict[str, Any]:
-    """One matcher on the size-series scene upscaled ``factor`` times, in a child process
-    (warm cache): seconds, peak memory and bad (2 x factor) on non-occluded pixels."""
+def size_run(data_root, matcher: str, factor: int, config: str | None,
+             tall: bool = False) -> dict[str, Any]:
+    """One matcher on the size-series scene upscaled ``factor`` times (``tall``: with its
+    upside-down copy below it, twice as tall), in a child process (warm cache): seconds,
+    peak memory and bad (2 x factor) on non-occluded pixels."""
     args = ["size", "--matcher", matcher, "--factor", str(factor),
-            "--config", config or "default"]
+            "--config", config or "default"] + (["--tall"] if tall else [])
     if data_root is not None:
         args += ["--data-root", str(data_root)]
     if matcher == "vsmatch":
@@ -215,10 +219,14 @@ def _child_size(argv: list[str]) -> None:
     ap.add_argument("--factor", type=int, required=True)
     ap.add_argument("--config", default="default")
     ap.add_argument("--data-root", default=None)
+    ap.add_argument("--tall", action="store_true")
     args = ap.parse_args(argv)
     [scene] = datasets.load_dataset(SIZE_DATASET, args.data_root, names=[SIZE_SCENE])
     left, right, gt, mask, max_disp = upscaled_scene(scene, args.factor)
     del scene
+    if args.tall:  # flipped upside down, a rectified pair stays rectified
+        left, right, gt, mask = (np.ascontiguousarray(np.concatenate([a, a[::-1]]))
+                                 for a in (left, right, gt, mask))
     if args.matcher == "vsmatch":
         crop = (slice(0, 48), slice(0, 64))  # load the kernels before the baseline
         pipeline.run(left[crop], right[crop], max_disp=16, config=args.config)
@@ -234,7 +242,7 @@ def _child_size(argv: list[str]) -> None:
     seconds = time.perf_counter() - start
     peak = _peak_rss_mb()
     threshold = 2.0 * args.factor
-    print(json.dumps({"matcher": args.matcher, "factor": args.factor,
+    print(json.dumps({"matcher": args.matcher, "factor": args.factor, "tall": args.tall,
                       "size": [left.shape[1], left.shape[0]], "levels": max_disp + 1,
                       "seconds": seconds, "peak_mb": peak, "before_match_mb": before,
                       "threshold": threshold,
@@ -261,6 +269,8 @@ def run_benchmark(data_root=None, config: str | None = None, repeats: int = 5,
     if size:
         report["size"] = [size_run(data_root, matcher, factor, config)
                           for factor in SIZE_FACTORS for matcher in SIZE_MATCHERS]
+        report["size"].append(size_run(data_root, "vsmatch", SIZE_FACTORS[-1], config,
+                                       tall=True))
     return report
 
 
@@ -299,10 +309,25 @@ def format_report(report: dict[str, Any]) -> str:
                   f"{'factor':<8}{'size':>11}{'levels':>8}{'matcher':>10}{'seconds':>9}"
                   f"{'peak MB':>9}{'bad':>8}"]
         for run in report["size"]:
-            lines.append(f"{run['factor']:<8}{run['size'][0]:>6}x{run['size'][1]:<4}"
+            factor = f"{run['factor']}" + (" tall" if run.get("tall") else "")
+            lines.append(f"{factor:<8}{run['size'][0]:>6}x{run['size'][1]:<4}"
                          f"{run['levels']:>8}{run['matcher']:>10}{run['seconds']:9.2f}"
                          f"{run['peak_mb']:9.0f}{run['bad_nonocc']:8.2f}")
-        lines.append("bad = % of non-occluded pixels off by more than 2 x factor")
+        lines.append("bad = % of non-occluded pixels off by more than 2 x factor; tall = "
+                     "the pair with its upside-down copy below it")
+        ours = [r for r in report["size"] if r["matcher"] == "vsmatch"
+                and r["factor"] == SIZE_FACTORS[-1]]
+        if len(ours) == 2:
+            plain, tall = sorted(ours, key=lambda r: r.get("tall", False))
+            lines.append(f"twice as tall: {tall['peak_mb'] / plain['peak_mb']:.2f} x the "
+                         f"peak memory, {tall['seconds'] / plain['seconds']:.2f} x the time")
+        by = {(r["matcher"], r["factor"]): r for r in report["size"] if not r.get("tall")}
+        big = SIZE_FACTORS[-1]
+        if ("vsmatch", big) in by:
+            for peer in ("sgbm-5", "sgbm-hh"):
+                if (peer, big) in by:
+                    lines.append(f"{big}x: vsmatch / {peer} time "
+                                 f"{by[('vsmatch', big)]['seconds'] / by[(peer, big)]['seconds']:.2f}")
     return "\n".join(lines) + "\n"
 
 

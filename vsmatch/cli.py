@@ -435,7 +435,7 @@ def _check_output_folder(path: Path) -> Path:
 @click.option("--no-cold", is_flag=True, help="Skip the empty-cache start-up run "
               "(it compiles every kernel, about 15 s).")
 @click.option("--no-size", is_flag=True, help="Skip the size series (Adirondack 1x, 2x, "
-              "4x; the 4x runs need about 14 GB and a few minutes).")
+              "4x, and 4x twice as tall; a few minutes).")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help="Write the measurements as JSON here.")
 @click.pass_context
@@ -449,7 +449,8 @@ def bench_command(ctx, data_root, config, repeats, no_cold, no_size, json_path):
     their ratio; start-up with an empty and a warm compilation cache; the whole 'vsmatch
     run' command; peak memory; the size series: Adirondack upscaled 1x, 2x and 4x
     (2872x1984, 292 disparities), vsmatch against SGBM's 5-direction and HH modes, with
-    time, peak memory and accuracy.
+    time, peak memory and accuracy, and vsmatch on the 4x pair made twice as tall (its
+    upside-down copy below it): how memory grows with the height.
     """
     from . import bench
 

@@ -6,4 +6,4 @@ Every kernel is parallel over rows or columns, and each output element is writte
 exactly one iteration, so results do not depend on the number of threads.
 """
 
-KERNEL_OPTIONS = dict(parallel=True, cache=True, nogil=True)
+KERNEL_OPTIONS = dict(parallel=True, cache=True, nogil=True, error_model="numpy")
