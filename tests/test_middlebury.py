@@ -34,14 +34,14 @@ def test_paper_method_on_middlebury2(middlebury2):
 
 def test_default_chain_on_middlebury2(middlebury2):
     avg, scenes = mean_nonocc(middlebury2, "default")
-    assert avg <= 2.7  # measured 2.48; the paper 3.82
+    assert avg <= 2.7  # measured 2.54; the paper 3.82
     assert scenes["venus"]["nonocc"] < 1.0 and scenes["teddy"]["nonocc"] < 4.8
 
 
 def test_default_chain_on_middlebury_third(data_dir):
     scenes = datasets.load_dataset("middlebury-third", data_dir)
     avg, per_scene = mean_nonocc(scenes, "default")
-    assert avg <= 6.0  # measured 5.71; the issue asks <= 9.0
+    assert avg <= 6.0  # measured 5.77; the issue asks <= 9.0
     assert max(s["nonocc"] for s in per_scene.values()) < 14.0  # Laundry, 12.75
 
 
@@ -78,7 +78,7 @@ def test_default_under_five_percent_noise_beats_the_paper(middlebury2):
     evaluation.evaluate_noise(middlebury2, {"default": "default"}, report, levels=[0.05],
                               seeds=1)
     figure = report["methods"]["default"]["noise"]["0.05"]["avg"]["nonocc"]
-    assert figure < 8.65  # the paper's Table 2 at 5 %; measured 8.11 (seed 0)
+    assert figure < 8.65  # the paper's Table 2 at 5 %; measured 8.00 (seed 0)
 
 
 def test_clean_views_stay_below_the_noise_floor(middlebury2, data_dir):

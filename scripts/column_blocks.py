@@ -1,0 +1,62 @@
+"""How many columns should a scanline column pass walk side by side?
+
+Times the column pass (both directions) alone on each of the twelve standard pairs (the
+middlebury2 scenes and the Middlebury 2014 quarter-size ones, official ranges) on a random
+volume of the pair's size, for blocks of 1, 2, 4 and 8 columns
+(``vsmatch.optimization.COLUMN_BLOCK`` is the one used). The result does not depend on it.
+
+    python scripts/column_blocks.py [--data-root DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from vsmatch import datasets
+from vsmatch._kernels.scanline import scanline_pass
+from vsmatch.config import load_config
+from vsmatch.images import colour_change, mirrored
+
+BLOCKS = (1, 2, 4, 8)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data-root", default=None)
+    args = parser.parse_args()
+    cfg = load_config(None).scanline
+    divisors = np.array([1.0, cfg.reduce_one, cfg.reduce_both])
+    p1s, p2s = ((value / divisors).astype(np.float32) for value in (cfg.p1, cfg.p2))
+    rng = np.random.default_rng(0)
+    totals = dict.fromkeys(BLOCKS, 0.0)
+    print(f"{'pair':<12}{'size':>14}" + "".join(f"{b:>8}" for b in BLOCKS))
+    for name in ("middlebury2", "middlebury2014-quarter"):
+        for scene in datasets.load_dataset(name, args.data_root):
+            height, width = scene.left.shape[:2]
+            n_disp = scene.max_disp + 1
+            volume = rng.random((height, width, n_disp), dtype=np.float32)
+            out = np.zeros_like(volume)
+            change_l = colour_change(scene.left, cfg.tau, along_rows=False)
+            change_r = mirrored(colour_change(scene.right, cfg.tau, along_rows=False),
+                                pad=n_disp, fill=1)
+            times = {}
+            for block in BLOCKS:
+                run = (volume, change_l, change_r, p1s, p2s, 0, np.float32(0.25), block, out)
+                scanline_pass(*run)  # compile, warm the caches
+                best = np.inf
+                for _ in range(5):
+                    start = time.perf_counter()
+                    scanline_pass(*run)
+                    best = min(best, time.perf_counter() - start)
+                times[block] = best
+                totals[block] += best
+            print(f"{scene.name:<12}{f'{width}x{height}x{n_disp}':>14}"
+                  + "".join(f"{times[b]:8.4f}" for b in BLOCKS))
+    print(f"{'total':<26}" + "".join(f"{totals[b]:8.3f}" for b in BLOCKS))
+
+
+if __name__ == "__main__":
+    main()
