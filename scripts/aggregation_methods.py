@@ -31,10 +31,14 @@ def median_ms(fn, repeats=7):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data-root", default=None)
+    parser.add_argument("--dataset", action="append", default=None,
+                        help="datasets to time (repeatable; default middlebury2)")
     args = parser.parse_args()
+    names = args.dataset or ["middlebury2"]
+    scenes = [s for name in names for s in datasets.load_dataset(name, args.data_root)]
     cfg = load_config("default")
-    print(f"{'scene':8s} {'pass':12s} {'arm':>5s} {'running':>8s} {'direct':>8s}  rule")
-    for scene in datasets.load_dataset("middlebury2", args.data_root):
+    print(f"{'scene':12s} {'pass':12s} {'arm':>5s} {'running':>8s} {'direct':>8s}  rule")
+    for scene in scenes:
         n_disp = scene.max_disp + 1
         grey_l, grey_r = to_grey(scene.left), to_grey(scene.right)
         grad_l, theta_l = sensitivity.visual_sensitivity(grey_l)
@@ -56,7 +60,7 @@ def main() -> None:
                                                          along_rows, normalise, out))
                 name = ("rows" if along_rows else "columns") + ("/norm" if normalise else "")
                 rule = "direct" if aggregation.direct_is_faster(mean_arm, n_disp) else "running"
-                print(f"{scene.name:8s} {name:12s} {mean_arm:5.1f} {running:8.1f} "
+                print(f"{scene.name:12s} {name:12s} {mean_arm:5.1f} {running:8.1f} "
                       f"{direct:8.1f}  {rule}")
 
 
