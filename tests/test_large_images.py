@@ -140,7 +140,7 @@ def test_band_search_equals_cross_sums_of_the_cost_volume(rng):
     hi = np.minimum(lo + rng.integers(-1, 6, size=(37, 45)), n_disp - 1).astype(np.int32)
     out = np.empty((37, 45), np.float32)
     search_band(*cost.cost_terms(left, right, census_l, census_r, grad_l, grad_r, cfg.cost),
-                arms, lo, hi, n_disp, 5, 16, out)
+                arms, lo, hi, n_disp, 5, 16, True, out)
     expected = _band_search_by_hand(volume, arms, lo, hi)
     assert np.array_equal(np.isinf(out), lo > hi)
     both = lo <= hi

@@ -141,6 +141,7 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
         for rows in (slice(0, top - y0), slice(bottom - y0, None)):
             lo_block[rows], hi_block[rows] = 1, 0
         block = np.empty((y1 - y0, left.shape[1]), dtype=np.float32)
-        search_band(*terms, arms, lo_block, hi_block, int(max_disp) + 1, support, TILE, block)
+        search_band(*terms, arms, lo_block, hi_block, int(max_disp) + 1, support, TILE,
+                    bool(cfg.subpixel.enabled), block)
         out[top:bottom] = block[top - y0:bottom - y0]
     return out

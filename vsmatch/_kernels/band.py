@@ -35,7 +35,7 @@ def _costs_at(local, first, last, x_q, census_q, census_r, grad_q, grad_r, colou
 @njit(**KERNEL_OPTIONS)
 def search_band(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, colour_r_rev,
                 census_table, grad_table, ad_table, max_cost, arms, lo, hi, n_disp,
-                support, tile, out):
+                support, tile, subpixel, out):
     """Best disparity in ``lo[y, x] .. hi[y, x]`` of each pixel, to sub-pixel (float32).
 
     The cost of a candidate d is the sum of the matching costs C(q, d) over the pixels q of
@@ -43,8 +43,9 @@ def search_band(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, colour_r_r
     image is cut into ``tile`` x ``tile`` tiles; for each, the costs of the tile and a
     ``support`` margin are computed once over the union of its pixels' bands, with running
     sums along rows and columns, so a cross sum is four lookups per candidate. A parabola
-    through the costs at d - 1, d, d + 1 gives the sub-pixel offset, as in the full search.
-    ``lo > hi`` marks a pixel without an estimate: it gets ``inf``.
+    through the costs at d - 1, d, d + 1 gives the sub-pixel offset, as in the full search
+    (``subpixel``; else whole disparities). ``lo > hi`` marks a pixel without an estimate:
+    it gets ``inf``.
     """
     height, width = lo.shape
     tiles_y = (height + tile - 1) // tile
@@ -119,7 +120,7 @@ def search_band(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, colour_r_r
                         best_cost = cost
                         best = d
                 result = np.float32(best)
-                if best - 1 >= first + lo_k and best + 1 <= first + hi_k:
+                if subpixel and best - 1 >= first + lo_k and best + 1 <= first + hi_k:
                     c0 = local[best - 1 - first]
                     c2 = local[best + 1 - first]
                     denom = c0 + c2 - 2.0 * best_cost
