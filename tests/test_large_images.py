@@ -93,8 +93,9 @@ def test_striped_and_pyramid_results_do_not_depend_on_threads(teddy):
 def test_refine_blocks_do_not_change_the_result(teddy, monkeypatch):
     s = teddy
     cfg = load_config(None)
+    _, coarse_max = pyramid.level_down(s.left.shape[1], s.max_disp)
     coarse = pipeline.run(pyramid.downsample(s.left), pyramid.downsample(s.right),
-                          max_disp=pyramid.coarse_range(s.max_disp), config=cfg)
+                          max_disp=coarse_max, config=cfg)
     whole = pyramid.refine(s.left, s.right, coarse.disparity, coarse.labels, s.max_disp, cfg)
     monkeypatch.setattr(pyramid, "REFINE_ROWS", 3 * pyramid.TILE)
     blocks = pyramid.refine(s.left, s.right, coarse.disparity, coarse.labels, s.max_disp, cfg)

@@ -315,19 +315,18 @@ def format_report(report: dict[str, Any]) -> str:
                          f"{run['peak_mb']:9.0f}{run['bad_nonocc']:8.2f}")
         lines.append("bad = % of non-occluded pixels off by more than 2 x factor; tall = "
                      "the pair with its upside-down copy below it")
-        ours = [r for r in report["size"] if r["matcher"] == "vsmatch"
-                and r["factor"] == SIZE_FACTORS[-1]]
-        if len(ours) == 2:
-            plain, tall = sorted(ours, key=lambda r: r.get("tall", False))
-            lines.append(f"twice as tall: {tall['peak_mb'] / plain['peak_mb']:.2f} x the "
-                         f"peak memory, {tall['seconds'] / plain['seconds']:.2f} x the time")
-        by = {(r["matcher"], r["factor"]): r for r in report["size"] if not r.get("tall")}
         big = SIZE_FACTORS[-1]
-        if ("vsmatch", big) in by:
-            for peer in ("sgbm-5", "sgbm-hh"):
-                if (peer, big) in by:
-                    lines.append(f"{big}x: vsmatch / {peer} time "
-                                 f"{by[('vsmatch', big)]['seconds'] / by[(peer, big)]['seconds']:.2f}")
+        runs = {(r["matcher"], r.get("tall", False)): r for r in report["size"]
+                if r["factor"] == big}
+        ours = runs.get(("vsmatch", False))
+        if ours is not None and ("vsmatch", True) in runs:
+            tall = runs[("vsmatch", True)]
+            lines.append(f"twice as tall: {tall['peak_mb'] / ours['peak_mb']:.2f} x the "
+                         f"peak memory, {tall['seconds'] / ours['seconds']:.2f} x the time")
+        for peer in ("sgbm-5", "sgbm-hh"):
+            if ours is not None and (peer, False) in runs:
+                ratio = ours["seconds"] / runs[(peer, False)]["seconds"]
+                lines.append(f"{big}x: vsmatch / {peer} time {ratio:.2f}")
     return "\n".join(lines) + "\n"
 
 

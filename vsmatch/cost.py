@@ -34,6 +34,12 @@ def census_transform(grey: np.ndarray, *, width: int = 9, height: int = 7,
     return out
 
 
+def census_for(grey: np.ndarray, cfg: CostConfig) -> np.ndarray:
+    """:func:`census_transform` with the config's window and dead band."""
+    return census_transform(grey, width=cfg.census_width, height=cfg.census_height,
+                            band=cfg.census_band)
+
+
 def rho(cost: np.ndarray | float, lam: float) -> np.ndarray | float:
     """Robust mapping into [0, 1): ``1 - exp(-cost / lam)``."""
     return 1.0 - np.exp(-np.asarray(cost, dtype=np.float64) / lam)

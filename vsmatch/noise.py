@@ -60,6 +60,13 @@ def smoothed_noise_factor(sigma: float) -> float:
     return float(np.sum(weights ** 2))
 
 
+def adapt_to_pair(cfg: Config, left: np.ndarray, right: np.ndarray) -> tuple[Config, float]:
+    """``cfg`` adapted (:func:`adapt_to_noise`) to the noise estimated on a pair, the mean
+    of its two views' estimates; and that estimate."""
+    sigma = 0.5 * (estimate_noise(left) + estimate_noise(right))
+    return adapt_to_noise(cfg, sigma), sigma
+
+
 def adapt_to_noise(cfg: Config, sigma: float) -> Config:
     """``cfg`` with its noise-sensitive values changed for an estimated noise ``sigma``.
 

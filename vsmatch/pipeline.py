@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from contextlib import contextmanager
@@ -66,8 +67,7 @@ def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
 def full_search_size(width: int, max_disp: int, cfg: Config) -> tuple[int, int]:
     """Width and disparity count of the pyramid level where the full search runs."""
     for _ in range(pyramid.coarse_levels(width, max_disp + 1, cfg.pyramid.max_row_cells)):
-        width = (width + 1) // 2
-        max_disp = min(pyramid.coarse_range(max_disp), width - 1)
+        width, max_disp = pyramid.level_down(width, max_disp)
     return width, max_disp + 1
 
 
@@ -130,22 +130,28 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
     return _coarse_to_fine(left, right, max_disp, cfg, levels)
 
 
+@contextmanager
+def _stage(seconds: dict[str, float], name: str):
+    """Add the time the block takes to ``seconds[name]``."""
+    start = time.perf_counter()
+    yield
+    seconds[name] = seconds.get(name, 0.0) + time.perf_counter() - start
+
+
 def _coarse_to_fine(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
                     levels: int) -> MatchResult:
     """The full search ``levels`` pyramid levels down, then a band search at each level up."""
     if levels == 0:
         return _full_search_in_stripes(left, right, max_disp, cfg)
     small_l, small_r = pyramid.downsample(left), pyramid.downsample(right)
-    coarse_max = min(pyramid.coarse_range(max_disp), small_l.shape[1] - 1)
+    _, coarse_max = pyramid.level_down(left.shape[1], max_disp)
     coarse = _coarse_to_fine(small_l, small_r, coarse_max, cfg, levels - 1)
     seconds = dict(coarse.seconds)
-    start = time.perf_counter()
-    result = pyramid.refine(left, right, coarse.disparity, coarse.labels, max_disp, cfg)
-    seconds["refine"] = seconds.get("refine", 0.0) + time.perf_counter() - start
+    with _stage(seconds, "refine"):
+        result = pyramid.refine(left, right, coarse.disparity, coarse.labels, max_disp, cfg)
     if cfg.subpixel.median:
-        start = time.perf_counter()
-        result = refinement.median3(result)
-        seconds["median"] = seconds.get("median", 0.0) + time.perf_counter() - start
+        with _stage(seconds, "median"):
+            result = refinement.median3(result)
     labels = None
     if coarse.labels is not None:
         labels = pyramid.upsample_nearest(coarse.labels, left.shape[:2])
@@ -199,8 +205,7 @@ def _full_search_in_stripes(left: np.ndarray, right: np.ndarray, max_disp: int,
         return _full_search(left, right, max_disp, cfg)
     noise_sigma = None
     if cfg.noise.adapt:  # once for the whole pair, as in one piece
-        noise_sigma = 0.5 * (noise.estimate_noise(left) + noise.estimate_noise(right))
-        cfg = noise.adapt_to_noise(cfg, noise_sigma)
+        cfg, noise_sigma = noise.adapt_to_pair(cfg, left, right)
         cfg = dataclasses.replace(cfg, noise=dataclasses.replace(cfg.noise, adapt=False))
     disp = np.empty((height, width), dtype=np.float32)
     labels = None
@@ -223,18 +228,12 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
     """The stages in order, every pixel searching disparities ``0 .. max_disp``."""
     n_disp = int(max_disp) + 1
     seconds: dict[str, float] = {}
-
-    @contextmanager
-    def stage(name: str):
-        start = time.perf_counter()
-        yield
-        seconds[name] = seconds.get(name, 0.0) + time.perf_counter() - start
+    stage = functools.partial(_stage, seconds)
 
     noise_sigma = None
     if cfg.noise.adapt:
         with stage("noise"):
-            noise_sigma = 0.5 * (noise.estimate_noise(left) + noise.estimate_noise(right))
-            cfg = noise.adapt_to_noise(cfg, noise_sigma)
+            cfg, noise_sigma = noise.adapt_to_pair(cfg, left, right)
     if cfg.cost.presmooth_sigma > 0:
         with stage("presmooth"):
             left = sensitivity.presmooth(left, cfg.cost.presmooth_sigma)
@@ -244,12 +243,9 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
         grey_l, grey_r = to_grey(left), to_grey(right)
         grad_l, theta_l = sensitivity.visual_sensitivity(grey_l)
         grad_r, theta_r = sensitivity.visual_sensitivity(grey_r)
-        census_kw = dict(width=cfg.cost.census_width, height=cfg.cost.census_height,
-                         band=cfg.cost.census_band)
-        volume = cost.cost_volume(left, right,
-                                  cost.census_transform(grey_l, **census_kw),
-                                  cost.census_transform(grey_r, **census_kw),
-                                  grad_l, grad_r, n_disp=n_disp, cfg=cfg.cost)
+        volume = cost.cost_volume(left, right, cost.census_for(grey_l, cfg.cost),
+                                  cost.census_for(grey_r, cfg.cost), grad_l, grad_r,
+                                  n_disp=n_disp, cfg=cfg.cost)
 
     arms_l = arms_r = None
     if cfg.aggregation.iterations > 0 or cfg.voting.enabled:

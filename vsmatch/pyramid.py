@@ -37,14 +37,17 @@ def coarse_levels(width: int, n_disp: int, max_row_cells: int) -> int:
     """How many times to halve a pair before the full search."""
     levels = 0
     while width * n_disp > max_row_cells and width >= 64 and n_disp >= 16:
-        width, n_disp = (width + 1) // 2, coarse_range(n_disp - 1) + 1
+        width, max_disp = level_down(width, n_disp - 1)
+        n_disp = max_disp + 1
         levels += 1
     return levels
 
 
-def coarse_range(max_disp: int) -> int:
-    """The largest disparity searched one level down."""
-    return int(math.ceil(max_disp / 2))
+def level_down(width: int, max_disp: int) -> tuple[int, int]:
+    """Width and largest disparity one level down (as :func:`downsample` halves the width),
+    the range kept below the width."""
+    width = (width + 1) // 2
+    return width, min(int(math.ceil(max_disp / 2)), width - 1)
 
 
 def downsample(image: np.ndarray) -> np.ndarray:
@@ -107,16 +110,13 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
     window of the block, so the result is the same as in one piece.
     """
     if cfg.noise.adapt:
-        sigma = 0.5 * (noise.estimate_noise(left) + noise.estimate_noise(right))
-        cfg = noise.adapt_to_noise(cfg, sigma)
+        cfg, _ = noise.adapt_to_pair(cfg, left, right)
     if cfg.cost.presmooth_sigma > 0:
         left = sensitivity.presmooth(left, cfg.cost.presmooth_sigma)
         right = sensitivity.presmooth(right, cfg.cost.presmooth_sigma)
     support = cfg.pyramid.support
     arms_cfg = dataclasses.replace(cfg.arms, l2=min(cfg.arms.l2, support),
                                    l1=min(cfg.arms.l1, support))
-    census_kw = dict(width=cfg.cost.census_width, height=cfg.cost.census_height,
-                     band=cfg.cost.census_band)
     margin = support + cfg.cost.census_height // 2 + 1  # + 1: the Sobel row
     height, width = left.shape[:2]
     low, high = coarse_extremes(coarse, coarse_labels)
@@ -130,7 +130,7 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
         views = left[y0:y1], right[y0:y1]
         grey = [to_grey(v) for v in views]
         grads = [sensitivity.visual_sensitivity(g) for g in grey]
-        census = [cost.census_transform(g, **census_kw) for g in grey]
+        census = [cost.census_for(g, cfg.cost) for g in grey]
         # Arms on the block; the margin keeps them from reaching its edge for the core rows.
         arms = aggregation.cross_arms(views[0], grads[0][1], grads[0][0], arms_cfg)
         terms = cost.cost_terms(views[0], views[1], census[0], census[1], grads[0][0],
