@@ -39,6 +39,8 @@ class CostConfig:
     # None switches a term off.
     lambda_gradient: float | None = _param(None, 0.01, 10000.0, nullable=True)
     lambda_ad: float | None = _param(None, 0.01, 1000.0, nullable=True)
+    # Weight of the colour term (set by the photometric stage when its residual is large).
+    ad_weight: float = _param(1.0, 0.0, 1.0)
     # Gaussian sigma applied to both views before every stage; 0 = off.
     presmooth_sigma: float = _param(0.0, 0.0, 5.0)
 
@@ -158,6 +160,20 @@ class PyramidConfig:
 
 
 @dataclass(frozen=True)
+class PhotometricConfig:
+    """Exposure and lighting differences (``vsmatch.photometric``): a first match on the
+    views halved until at most ``max_width`` pixels wide, census and gradient only, gives
+    the pixels the right view's colour map is learnt from; the colour term's weight falls
+    from 1 to 0 as the colour difference the map leaves grows from ``fade_from`` to
+    ``fade_to`` grey levels."""
+
+    enabled: bool = _param(False)
+    max_width: int = _param(400, 32, 100000)
+    fade_from: float = _param(4.0, 0.0, 255.0)
+    fade_to: float = _param(6.0, 0.0, 255.0)
+
+
+@dataclass(frozen=True)
 class MemoryConfig:
     """Working memory of the full search: with more than ``max_mb`` megabytes of cost
     volumes and per-pixel arrays, it runs on horizontal stripes that fit, each with
@@ -181,6 +197,7 @@ class Config:
     fill: FillConfig = field(default_factory=FillConfig)
     discontinuity: DiscontinuityConfig = field(default_factory=DiscontinuityConfig)
     subpixel: SubpixelConfig = field(default_factory=SubpixelConfig)
+    photometric: PhotometricConfig = field(default_factory=PhotometricConfig)
     pyramid: PyramidConfig = field(default_factory=PyramidConfig)
     memory: MemoryConfig = field(default_factory=MemoryConfig)
 
@@ -229,6 +246,10 @@ def _field_kind(spec: dataclasses.Field) -> type:
 
 
 def _check_cross_constraints(cfg: Config) -> None:
+    if cfg.photometric.fade_to <= cfg.photometric.fade_from:
+        raise ConfigError(f"config values photometric.fade_from = {cfg.photometric.fade_from} "
+                          f"and fade_to = {cfg.photometric.fade_to} must satisfy "
+                          "fade_from < fade_to")
     if cfg.arms.l1 >= cfg.arms.l2:
         raise ConfigError(f"config values arms.l1 = {cfg.arms.l1} and arms.l2 = {cfg.arms.l2} "
                           "must satisfy l1 < l2")

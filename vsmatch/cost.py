@@ -47,7 +47,7 @@ def rho(cost: np.ndarray | float, lam: float) -> np.ndarray | float:
 
 def max_cost(cfg: CostConfig) -> float:
     """The cost given where the right pixel does not exist: every term at its limit 1."""
-    return 1.0 + (cfg.lambda_gradient is not None) + (cfg.lambda_ad is not None)
+    return 1.0 + (cfg.lambda_gradient is not None) + (cfg.lambda_ad is not None) * cfg.ad_weight
 
 
 #: Gradient magnitudes are quantised to this many steps per grey level for the table
@@ -72,12 +72,12 @@ def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
     else:
         steps = np.arange(max(q_l.max(), q_r.max()) + 1) / GRADIENT_STEPS
         grad_table = rho(steps, cfg.lambda_gradient).astype(np.float32)
-    if cfg.lambda_ad is None:
+    if cfg.lambda_ad is None or cfg.ad_weight == 0:
         ad_table = np.empty(0, np.float32)
     else:
         channels = colour_l.shape[2]
-        ad_table = rho(np.arange(255 * channels + 1) / channels, cfg.lambda_ad).astype(
-            np.float32)
+        ad_table = (cfg.ad_weight * rho(np.arange(255 * channels + 1) / channels,
+                                        cfg.lambda_ad)).astype(np.float32)
     return (census_l, mirrored(census_r, axis=1), q_l, mirrored(q_r, axis=1),
             colour_l, mirrored(colour_r, axis=1), census_table, grad_table, ad_table,
             np.float32(max_cost(cfg)))

@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import (aggregation, cost, disparity, noise, optimization, pyramid, refinement,
-               sensitivity)
+from . import (aggregation, cost, disparity, noise, optimization, photometric, pyramid,
+               refinement, sensitivity)
 from .config import Config, load_config
 from .disparity import INVALID_DISPARITY
 from .images import to_grey
@@ -29,6 +29,7 @@ class MatchResult:
     noise_sigma: float | None = None  # estimated, when noise.adapt is on
     levels: int = 0  # pyramid levels below the input where the full search ran
     stripes: int = 1  # stripes the full search ran in
+    photometric: photometric.Correction | None = None  # the right view's colour map, if any
 
 
 def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
@@ -125,9 +126,52 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0
 
 def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
                    cfg: Config) -> MatchResult:
-    """Disparities ``0 .. max_disp``: coarse-to-fine when a row is too wide a search."""
+    """Disparities ``0 .. max_disp``: the exposure corrected when asked, then
+    coarse-to-fine when a row is too wide a search."""
+    correction = None
+    if cfg.photometric.enabled:
+        seconds: dict[str, float] = {}
+        with _stage(seconds, "photometric"):
+            right, cfg, correction = _correct_exposure(left, right, max_disp, cfg)
     levels = pyramid.coarse_levels(left.shape[1], max_disp + 1, cfg.pyramid.max_row_cells)
-    return _coarse_to_fine(left, right, max_disp, cfg, levels)
+    result = _coarse_to_fine(left, right, max_disp, cfg, levels)
+    if cfg.photometric.enabled:
+        result.seconds = {**seconds, **result.seconds}
+        result.photometric = correction
+    return result
+
+
+def _correct_exposure(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
+                      ) -> tuple[np.ndarray, Config, photometric.Correction | None]:
+    """The right view mapped onto the left's colours and the config with the colour
+    term's weight, learnt from a first match on small views (``vsmatch.photometric``)."""
+    small_l, small_r, small_max = left, right, max_disp
+    while True:  # at least one level down: only the statistics of the matches are used
+        width, small_max = pyramid.level_down(small_l.shape[1], small_max)
+        if width < 2 * cfg.cost.census_width or small_max < 1 or min(
+                small_l.shape[:2]) < 2 * cfg.cost.census_height:
+            return right, cfg, None
+        small_l, small_r = pyramid.downsample(small_l), pyramid.downsample(small_r)
+        if width <= cfg.photometric.max_width:
+            break
+    # Census and gradient only (the colour term is what is in doubt), no refinement: the
+    # pixels that pass the left-right check are all that is used.
+    first_cfg = dataclasses.replace(
+        cfg, cost=dataclasses.replace(cfg.cost, lambda_ad=None),
+        consistency=dataclasses.replace(cfg.consistency, enabled=True),
+        voting=dataclasses.replace(cfg.voting, enabled=False),
+        fill=dataclasses.replace(cfg.fill, enabled=False),
+        discontinuity=dataclasses.replace(cfg.discontinuity, enabled=False),
+        subpixel=dataclasses.replace(cfg.subpixel, enabled=False, median=False))
+    first = _full_search_in_stripes(small_l, small_r, small_max, first_cfg)
+    matched = (first.labels == disparity.VALID) & np.isfinite(first.disparity)
+    correction = photometric.learn(small_l, small_r, first.disparity, matched)
+    if correction is None:
+        return right, cfg, None
+    weight = photometric.colour_weight(correction.residual, cfg.photometric)
+    cfg = dataclasses.replace(cfg, cost=dataclasses.replace(
+        cfg.cost, ad_weight=cfg.cost.ad_weight * weight))
+    return photometric.apply(right, correction), cfg, correction
 
 
 @contextmanager

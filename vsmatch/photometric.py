@@ -1,0 +1,83 @@
+"""Exposure and lighting differences between the views (README, "Exposure and lighting").
+
+Census and the gradient direction do not mind a change of exposure; the colour term
+(absolute differences) and the gradient magnitude do. Middlebury 2014's ``E`` and ``L``
+scenes differ by up to 43 grey levels at matching pixels. The views' global histograms
+cannot tell exposure from content (what one view sees and the other does not), so the
+correction is learnt from pixels matched by a quick first match: each channel of the right
+view is mapped onto the left's by matching the quantiles of the two views' colours over
+those pixels. What the map cannot explain (a light that moved) is left as the residual:
+the median colour difference of the matched pixels after the map, in grey levels. The
+colour term fades out as it grows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import PhotometricConfig
+
+#: Quantiles matched per channel (0, 1, ..., 100 %).
+QUANTILES = np.linspace(0.0, 100.0, 101)
+#: Fewer matched pixels than this and the views are left as they are.
+MIN_MATCHES = 1000
+
+
+@dataclass(frozen=True)
+class Correction:
+    """The right view's per-channel map onto the left's colours, and what it leaves."""
+
+    table: np.ndarray  # (256, channels) uint8: new value of each grey level
+    residual: float  # median mean-over-channels |left - mapped right| at matched pixels
+    before: float  # the same without the map
+    matches: int  # pixels it was learnt from
+
+
+def _channels(image: np.ndarray) -> np.ndarray:
+    return image.reshape(image.shape[0], image.shape[1], -1)
+
+
+def learn(left: np.ndarray, right: np.ndarray, disp: np.ndarray,
+          matched: np.ndarray) -> Correction | None:
+    """The right view's map onto the left's from left pixels ``matched`` at ``disp``;
+    ``None`` with fewer than :data:`MIN_MATCHES` usable pixels."""
+    ys, xs = np.nonzero(matched)
+    xr = xs - np.rint(disp[ys, xs]).astype(np.int64)
+    inside = xr >= 0
+    ys, xs, xr = ys[inside], xs[inside], xr[inside]
+    if len(ys) < MIN_MATCHES:
+        return None
+    at_left = _channels(left)[ys, xs].astype(np.float32)
+    at_right = _channels(right)[ys, xr].astype(np.float32)
+    table = np.empty((256, at_left.shape[1]), dtype=np.uint8)
+    for c in range(at_left.shape[1]):
+        q_left = np.percentile(at_left[:, c], QUANTILES)
+        q_right = np.percentile(at_right[:, c], QUANTILES)
+        # Strictly increasing for np.interp; a flat stretch (saturation) maps to its mean.
+        q_right = q_right + np.arange(len(QUANTILES)) * 1e-4
+        table[:, c] = np.clip(np.rint(np.interp(np.arange(256), q_right, q_left)), 0, 255)
+    mapped = np.take_along_axis(table, at_right.astype(np.int64), axis=0).astype(np.float32)
+    residual = float(np.median(np.abs(at_left - mapped).mean(axis=1)))
+    before = float(np.median(np.abs(at_left - at_right).mean(axis=1)))
+    return Correction(table=table, residual=residual, before=before, matches=len(ys))
+
+
+def apply(right: np.ndarray, correction: Correction) -> np.ndarray:
+    """The right view with each channel passed through the correction's table."""
+    out = np.empty_like(right)
+    source, target = _channels(right), _channels(out)
+    for c in range(source.shape[2]):
+        target[..., c] = correction.table[:, c][source[..., c]]
+    return out
+
+
+def colour_weight(residual: float, cfg: PhotometricConfig) -> float:
+    """Weight of the colour term: 1 up to ``fade_from`` grey levels of residual, falling
+    linearly to 0 at ``fade_to``."""
+    if residual <= cfg.fade_from:
+        return 1.0
+    if residual >= cfg.fade_to:
+        return 0.0
+    return (cfg.fade_to - residual) / (cfg.fade_to - cfg.fade_from)
