@@ -24,7 +24,7 @@ def cross_arms(image: np.ndarray, theta: np.ndarray, sensitivity: np.ndarray,
                        colour_change(image, cfg.tau2, along_rows=True),
                        colour_change(image, cfg.tau2, along_rows=False),
                        float(cfg.tau1), float(cfg.tau3), int(cfg.l1), int(cfg.l2),
-                       float(cfg.kappa), out)
+                       float(cfg.kappa), bool(cfg.shrink), out)
     return out
 
 

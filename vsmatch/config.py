@@ -74,6 +74,9 @@ class ArmsConfig:
     l2: int = _param(34, 1, 255)
     kappa: float = _param(0.0, -1.0, 10.0)
     g_sat: float = _param(200.0, 1.0, 2000.0)
+    # The colour threshold falls linearly with the arm's length, tau1 (1 - k / l2), as in
+    # the authors' published code.
+    shrink: bool = _param(False)
 
 
 @dataclass(frozen=True)

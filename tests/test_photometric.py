@@ -1,0 +1,85 @@
+"""The photometric stage: learning the right view's colour map from matched pixels."""
+
+import numpy as np
+import pytest
+
+from vsmatch import photometric, pipeline
+from vsmatch.config import ConfigError, PhotometricConfig, config_from_dict, load_config
+from vsmatch.datasets import load_dataset
+from vsmatch.evaluation import score_scene, scoring_for
+from vsmatch.synthetic import make_pair
+
+
+def _exposed(values: np.ndarray) -> np.ndarray:
+    """A brighter exposure that saturates: what MotorcycleE's right view looks like."""
+    return np.clip(1.6 * values.astype(np.float32) + 10, 0, 255).astype(np.uint8)
+
+
+def test_the_map_undoes_an_exposure_change_learnt_at_matched_pixels(rng):
+    left = rng.integers(0, 150, size=(60, 80, 3), dtype=np.uint8)
+    shift = 5
+    right = np.zeros_like(left)
+    right[:, :-shift] = left[:, shift:]  # left pixel x is right pixel x - 5
+    right = _exposed(right)
+    disp = np.full(left.shape[:2], shift, np.float32)
+    matched = np.zeros(left.shape[:2], bool)
+    matched[:, shift:] = True
+    correction = photometric.learn(left, right, disp, matched)
+    assert correction.before > 40 and correction.residual <= 1.0
+    grey = np.arange(150)
+    back = correction.table[_exposed(grey), 0].astype(int)
+    assert np.abs(back - grey).max() <= 2
+    mapped = photometric.apply(right, correction)
+    assert np.abs(mapped[:, :-shift].astype(int) - left[:, shift:]).mean() < 1.0
+
+
+def test_unrelated_views_leave_a_large_residual(rng):
+    left = rng.integers(0, 256, size=(60, 80, 3), dtype=np.uint8)
+    right = rng.integers(0, 256, size=(60, 80, 3), dtype=np.uint8)
+    correction = photometric.learn(left, right, np.zeros((60, 80), np.float32),
+                                   np.ones((60, 80), bool))
+    assert correction.residual > 40  # quantiles agree; pixels do not
+
+
+def test_too_few_matches_learn_nothing(rng):
+    image = rng.integers(0, 256, size=(20, 20), dtype=np.uint8)
+    assert photometric.learn(image, image, np.zeros((20, 20), np.float32),
+                             np.ones((20, 20), bool)) is None  # 400 < MIN_MATCHES
+
+
+def test_colour_weight_fades_linearly():
+    cfg = PhotometricConfig(fade_from=5, fade_to=10)
+    assert [photometric.colour_weight(r, cfg) for r in (0, 5, 7.5, 10, 40)] == \
+        [1.0, 1.0, 0.5, 0.0, 0.0]
+
+
+def test_fade_bounds_are_checked():
+    with pytest.raises(ConfigError, match="fade_from < fade_to"):
+        config_from_dict({"photometric": {"fade_from": 6, "fade_to": 6}})
+
+
+def test_the_pipeline_learns_an_exposure_change_and_keeps_the_colour_term():
+    pair = make_pair(width=240, height=180)
+    same = pipeline.run(pair.left, pair.right, max_disp=pair.max_disp)
+    assert same.photometric.before < 3 and same.config.cost.ad_weight == 1.0
+    brighter = pipeline.run(pair.left, _exposed(pair.right // 2 + 40), max_disp=pair.max_disp)
+    assert brighter.photometric.before > 20 and brighter.photometric.residual < 3
+    assert brighter.config.cost.ad_weight == 1.0
+    bad = {name: float(np.mean(np.abs(r.disparity - pair.disparity)[pair.nonocc] > 1))
+           for name, r in (("same", same), ("brighter", brighter))}
+    assert bad["brighter"] < bad["same"] + 0.02, bad
+
+
+@pytest.mark.parametrize("name, with_stage, without", [("MotorcycleE", 3.7, 4.3),
+                                                       ("ArtL", 7.0, 7.9)])
+def test_exposure_and_lighting_scenes_gain(data_dir, name, with_stage, without):
+    """Middlebury 2014 quarter size, bad 2.0 nonocc: measured MotorcycleE 3.34 against 4.58
+    without the stage, ArtL 6.13 against 8.18."""
+    scene = next(s for s in load_dataset("middlebury2014-quarter", data_dir) if s.name == name)
+    scoring = scoring_for("middlebury2014-quarter")
+    off = config_from_dict({"photometric": {"enabled": False}}, base=load_config("default"))
+    figures = {}
+    for label, cfg in (("on", "default"), ("off", off)):
+        disp = pipeline.match(scene.left, scene.right, max_disp=scene.max_disp, config=cfg)
+        figures[label] = score_scene(disp, scene, scoring)["nonocc"]
+    assert figures["on"] <= with_stage and figures["off"] > without, figures
