@@ -116,13 +116,17 @@ def lr_labels(dl, dr, n_disp, tol):
     return out
 
 
-def scanline(cost, il, ir, p1, p2, tau, r1, r2):
-    """Mean of the four directional path costs, written out direction by direction."""
+def scanline(cost, il, ir, p1, p2, tau, r1, r2, directions=4):
+    """Mean of the directional path costs (rows and columns, and with 8 the diagonals),
+    written out direction by direction."""
     h, w, n = cost.shape
     il = il.astype(float).reshape(h, w, -1)
     ir = ir.astype(float).reshape(h, w, -1)
     total = np.zeros((h, w, n))
-    for dy, dx in ((0, 1), (0, -1), (1, 0), (-1, 0)):
+    steps = [(0, 1), (0, -1), (1, 0), (-1, 0)]
+    if directions == 8:
+        steps += [(1, 1), (-1, -1), (1, -1), (-1, 1)]
+    for dy, dx in steps:
         path = np.zeros((h, w, n))
         ys = range(h) if dy >= 0 else range(h - 1, -1, -1)
         xs = range(w) if dx >= 0 else range(w - 1, -1, -1)
@@ -147,7 +151,7 @@ def scanline(cost, il, ir, p1, p2, tau, r1, r2):
                     if d < n - 1:
                         cands.append(prev[d + 1] + q1)
                     path[y, x, d] = cost[y, x, d] + min(cands) - m
-        total += path / 4
+        total += path / directions
     return total
 
 

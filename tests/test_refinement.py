@@ -7,14 +7,16 @@ from vsmatch.config import DiscontinuityConfig, ScanlineConfig, VotingConfig
 import reference
 
 
-def test_scanline_matches_reference(rng):
-    h, w, n = 7, 9, 5
+@pytest.mark.parametrize("directions, h, w", [(4, 7, 9), (8, 7, 9), (8, 11, 6)])
+def test_scanline_matches_reference(rng, directions, h, w):
+    n = 5
     cost = rng.random((h, w, n), dtype=np.float32) * 2
     left = rng.integers(0, 40, size=(h, w, 3), dtype=np.uint8)
     right = rng.integers(0, 40, size=(h, w, 3), dtype=np.uint8)
-    cfg = ScanlineConfig(enabled=True, p1=0.5, p2=1.7, tau=20, reduce_one=4, reduce_both=10)
+    cfg = ScanlineConfig(enabled=True, p1=0.5, p2=1.7, tau=20, reduce_one=4, reduce_both=10,
+                         directions=directions)
     got = optimization.scanline_optimise(cost, left, right, cfg)
-    want = reference.scanline(cost, left, right, 0.5, 1.7, 20, 4, 10)
+    want = reference.scanline(cost, left, right, 0.5, 1.7, 20, 4, 10, directions)
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-5)
 
 

@@ -100,6 +100,8 @@ class ScanlineConfig:
     tau: float = _param(15.0, 0.0, 255.0)
     reduce_one: float = _param(4.0, 1.0, 100.0)
     reduce_both: float = _param(10.0, 1.0, 100.0)
+    # 4: along rows and columns; 8: the diagonals too (as SGM's usual eight paths).
+    directions: int = _param(4, choices=(4, 8))
 
 
 @dataclass(frozen=True)

@@ -103,3 +103,47 @@ def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, bl
                                              change_r_rev[ey, width - 1 - ex:],
                                              p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1],
                                              m, weight, n_disp, bits)
+
+
+@njit(**KERNEL_OPTIONS)
+def scanline_diagonal_pass(cost, change_l, change_r_rev, p1s, p2s, step_x, weight, out):
+    """:func:`scanline_pass` along the diagonals that step (1, ``step_x``), both ways.
+
+    ``change_l[y, x]``: 1 where the colour changes by ``tau`` or more between (y, x) and
+    (y - 1, x - step_x), and where there is no such pixel; ``change_r_rev`` the same of the
+    right image, reversed along x and padded with ones.
+    """
+    height, width, n_disp = cost.shape
+    n_lines = height + width - 1
+    for index in prange(n_lines):
+        line = np.int64(index)  # prange's index may be unsigned: keep the sums signed
+        # Line starts on the top row, then down the first column (last for step_x = -1).
+        if line < width:
+            y0, x0 = 0, line if step_x == 1 else width - 1 - line
+        else:
+            y0, x0 = line - width + 1, 0 if step_x == 1 else width - 1
+        room_x = width - 1 - x0 if step_x == 1 else x0
+        length = min(height - y0, room_x + 1)
+        paths = np.full((2, n_disp + 2), np.inf, dtype=np.float32)
+        path_bits = paths.view(np.int32)
+        bits = np.empty(1, dtype=np.int32)
+        prev_min = np.float32(0.0)
+        for direction in (1, -1):
+            start = 0 if direction == 1 else length - 1
+            for step in range(length):
+                i = start + direction * step
+                y = y0 + i
+                x = x0 + i * step_x
+                now = step % 2
+                if step == 0:
+                    prev_min = _first_step(cost[y, x], out[y, x], paths[now], weight, n_disp)
+                    continue
+                # The edge crossed is stored at the later pixel of the two, top to bottom.
+                ey = y if direction == 1 else y + 1
+                ex = x if direction == 1 else x + step_x
+                cl = change_l[ey, ex]
+                m = prev_min
+                prev_min = _next_step(cost[y, x], out[y, x], paths[1 - now], paths[now],
+                                      path_bits[now], change_r_rev[ey, width - 1 - ex:],
+                                      p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1],
+                                      m, weight, n_disp, bits)
