@@ -218,13 +218,14 @@ def format_tables(report: dict[str, Any]) -> str:
 
 
 def ablation_configs(base: Config) -> dict[str, Config]:
-    """The refinement chain built up stage by stage to ``base``, then two alternatives.
+    """The refinement chain built up stage by stage to ``base``, then alternatives.
 
-    The first row is ``base`` with every §5 stage off (§1-4); each next row switches one
-    stage on with ``base``'s values for it, so the last of them is ``base`` itself. Then
-    ``base`` with the other filling (16 search directions, the "proper interpolation" of
-    §5.3, or 2 when ``base`` uses more), and ``base`` with the direction factor ``kappa``
-    at 0 (or at 0.5 when ``base`` has 0).
+    The first row is ``base`` with the exposure correction and every §5 stage off (§1-4);
+    each next row switches one stage on with ``base``'s values for it, so the last of them
+    is ``base`` itself. Then ``base`` with one thing changed each: the scanline's 4 or 8
+    directions (whichever ``base`` does not use), the shrinking arm threshold, the other
+    filling (16 search directions, the "proper interpolation" of §5.3, or 2 when ``base``
+    uses more), and the direction factor ``kappa`` at 0 (or at 0.5 when ``base`` has 0).
     """
     def section(name: str, **changes) -> dict:
         return {name: {**dataclasses.asdict(getattr(base, name)), **changes}}
@@ -232,18 +233,25 @@ def ablation_configs(base: Config) -> dict[str, Config]:
     steps = [
         ("§1-4: cost, aggregation, LR check, fill",
          {"scanline": {"enabled": False}, "voting": {"enabled": False},
-          "discontinuity": {"enabled": False}, "subpixel": {"enabled": False, "median": False}}),
+          "discontinuity": {"enabled": False}, "subpixel": {"enabled": False, "median": False},
+          "photometric": {"enabled": False}}),
         ("+ scanline optimisation", section("scanline", enabled=True)),
         ("+ region voting", section("voting", enabled=True)),
         ("+ discontinuity adjustment", section("discontinuity", enabled=True)),
         ("+ sub-pixel", {"subpixel": {"enabled": True, "median": False}}),
         ("+ 3x3 median", {"subpixel": {"enabled": True, "median": True}}),
+        ("+ exposure correction", section("photometric", enabled=True)),
     ]
     configs = {}
     cfg = base
     for label, change in steps:
         cfg = config_from_dict(change, base=cfg)
         configs[label] = cfg
+    others = 8 if base.scanline.directions == 4 else 4
+    configs[f"full chain, scanline in {others} directions"] = config_from_dict(
+        {"scanline": {"directions": others}}, base=base)
+    configs[f"full chain, shrinking arm threshold {'off' if base.arms.shrink else 'on'}"] = \
+        config_from_dict({"arms": {"shrink": not base.arms.shrink}}, base=base)
     directions = 16 if base.fill.directions == 2 else 2
     configs[f"full chain, fill from {directions} directions"] = config_from_dict(
         {"fill": {"directions": directions}}, base=base)
