@@ -83,3 +83,20 @@ def test_exposure_and_lighting_scenes_gain(data_dir, name, with_stage, without):
         disp = pipeline.match(scene.left, scene.right, max_disp=scene.max_disp, config=cfg)
         figures[label] = score_scene(disp, scene, scoring)["nonocc"]
     assert figures["on"] <= with_stage and figures["off"] > without, figures
+
+
+def test_verbose_run_reports_the_exposure_map(tmp_path):
+    import cv2  # noqa: PLC0415
+    from click.testing import CliRunner  # noqa: PLC0415
+
+    from vsmatch.cli import main  # noqa: PLC0415
+
+    pair = make_pair(width=240, height=180)
+    cv2.imwrite(str(tmp_path / "l.png"), pair.left)
+    cv2.imwrite(str(tmp_path / "r.png"), _exposed(pair.right // 2 + 40))
+    result = CliRunner().invoke(main, ["--verbose", "run", str(tmp_path / "l.png"),
+                                       str(tmp_path / "r.png"), "-o", str(tmp_path / "d.pfm"),
+                                       "--max-disp", str(pair.max_disp)])
+    assert result.exit_code == 0, result.output
+    line = next(t for t in result.output.splitlines() if t.startswith("exposure:"))
+    assert "after the right view's colour map" in line and "colour term weight 1.00" in line

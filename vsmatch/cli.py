@@ -298,6 +298,12 @@ def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
         action = "adapted" if result.noise_sigma > floor else "no adaptation"
         _verbose(ctx, f"estimated noise: {result.noise_sigma:.2f} grey levels "
                       f"(floor {floor:g}: {action})")
+    if result.photometric is not None:
+        fit = result.photometric
+        _verbose(ctx, f"exposure: matched colours differ by {fit.before:.1f} grey levels, "
+                      f"{fit.residual:.1f} after the right view's colour map "
+                      f"({fit.matches} pixels); colour term weight "
+                      f"{result.config.cost.ad_weight:.2f}")
     if result.levels or result.stripes > 1:
         _verbose(ctx, f"full search {result.levels} pyramid level(s) down, in "
                       f"{result.stripes} stripe(s)")
