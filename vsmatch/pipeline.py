@@ -168,7 +168,7 @@ def _correct_exposure(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: C
     correction = photometric.learn(small_l, small_r, first.disparity, matched)
     if correction is None:
         return right, cfg, None
-    weight = photometric.colour_weight(correction.residual, cfg.photometric)
+    weight = photometric.colour_weight(correction.excess, cfg.photometric)
     cfg = dataclasses.replace(cfg, cost=dataclasses.replace(
         cfg.cost, ad_weight=cfg.cost.ad_weight * weight))
     return photometric.apply(right, correction), cfg, correction
