@@ -90,3 +90,16 @@ def test_aggregation_keeps_a_constant_volume():
     arms[-1, :, 3] = 0
     got = aggregation.aggregate_cross(volume, planes(arms), planes(arms), iterations=4)
     np.testing.assert_allclose(got, 0.25, rtol=1e-6)
+
+
+def test_shrinking_threshold_shortens_arms_on_a_ramp():
+    """One grey level per pixel along x: the fixed threshold 16 stops the arm after 15
+    pixels; falling as 16 (1 - k / 40), it stops where k >= 16 (1 - k / 40), after 11."""
+    ramp = np.tile(np.arange(100, dtype=np.uint8), (5, 1))
+    theta = np.zeros(ramp.shape, np.float32)
+    grad = np.zeros(ramp.shape, np.float32)
+    lengths = {}
+    for shrink in (False, True):
+        cfg = ArmsConfig(tau1=16, tau2=16, tau3=16, l1=39, l2=40, shrink=shrink)
+        lengths[shrink] = aggregation.cross_arms(ramp, theta, grad, cfg)[1, 2, 50]  # right arm
+    assert lengths == {False: 15, True: 11}

@@ -84,14 +84,22 @@ def middlebury2014_report(data_dir):
     return scenes, report, disparities
 
 
+#: CNES Pandora 1.9's census + SGM chain, bad 2.0 nonocc (EVALUATION.md, measured elsewhere).
+PANDORA_2014 = {"Adirondack": 3.42, "ArtL": 10.00, "Jadeplant": 13.06, "Motorcycle": 5.32,
+                "MotorcycleE": 5.11, "Piano": 11.25, "PianoL": 20.85, "Teddy": 5.02}
+
+
 @pytest.mark.data
 def test_default_on_middlebury2014(middlebury2014_report):
     _, report, _ = middlebury2014_report
     assert report["metric"] == "bad2.0"
     ours, sgbm = (report["methods"][m] for m in ("default", "sgbm"))
-    assert ours["avg"]["nonocc"] <= 10.0  # measured 9.61; SGBM 22.38
+    assert ours["avg"]["nonocc"] <= 7.7  # measured 7.44 (issue 12 asks <= 8.0); SGBM 22.38
     assert ours["avg"]["nonocc"] < sgbm["avg"]["nonocc"] - 5
-    assert ours["scenes"]["Teddy"]["nonocc"] < 2.6 and ours["scenes"]["Piano"]["nonocc"] < 17
+    ahead = [name for name, figure in PANDORA_2014.items()
+             if ours["scenes"][name]["nonocc"] < figure]
+    assert len(ahead) >= 7, ahead  # measured: all 8 (Piano 11.23 against 11.25)
+    assert ours["scenes"]["Teddy"]["nonocc"] < 2.5 and ours["scenes"]["PianoL"]["nonocc"] < 20.5
     assert ours["avg"]["metrics"]["nonocc"]["invalid"] == 0.0
 
 
@@ -119,7 +127,8 @@ def test_default_on_kitti2015_and_the_json_shape(data_dir, tmp_path):
     assert set(scenes["000000"]) == {"all", "metrics", "seconds", "range"}
     assert scenes["000000"]["range"] == [0, 191]
     assert scenes["000000"]["all"] == scenes["000000"]["metrics"]["all"]["D1"]
-    assert report["methods"]["default"]["avg"]["all"] <= 8.5  # measured 7.96; SGBM 20.64
+    assert report["methods"]["default"]["avg"]["all"] <= 7.0  # measured 6.67 (7.96 before
+    # issue 12); SGBM 20.64
     assert cv2.imread(str(tmp_path / "k.png")) is not None
 
 
