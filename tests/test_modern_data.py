@@ -98,7 +98,7 @@ def test_default_on_middlebury2014(middlebury2014_report):
     assert ours["avg"]["nonocc"] < sgbm["avg"]["nonocc"] - 5
     ahead = [name for name, figure in PANDORA_2014.items()
              if ours["scenes"][name]["nonocc"] < figure]
-    assert len(ahead) >= 7, ahead  # measured: all 8 (Piano 11.23 against 11.25)
+    assert len(ahead) >= 7, ahead  # measured: all but Piano (11.86 against 11.25)
     assert ours["scenes"]["Teddy"]["nonocc"] < 2.5 and ours["scenes"]["PianoL"]["nonocc"] < 20.5
     assert ours["avg"]["metrics"]["nonocc"]["invalid"] == 0.0
 

@@ -166,14 +166,16 @@ class PyramidConfig:
 
 @dataclass(frozen=True)
 class PhotometricConfig:
-    """Exposure and lighting differences (``vsmatch.photometric``): a first match on the
-    views halved until at most ``max_width`` pixels wide, census and gradient only, gives
-    the pixels the right view's colour map is learnt from; the colour term's weight falls
-    from 1 to 0 as the colour difference the map leaves grows from ``fade_from`` to
+    """Exposure and lighting differences (``vsmatch.photometric``): a quick first match on
+    the views halved until at most ``max_width`` pixels wide (census and gradient costs
+    averaged over ``box`` x ``box`` windows, left-right checked) gives the pixels the right
+    view's colour map is learnt from; the colour term's weight falls from 1 to 0 as the
+    colour difference the map leaves beyond the noise grows from ``fade_from`` to
     ``fade_to`` grey levels."""
 
     enabled: bool = _param(False)
     max_width: int = _param(400, 32, 100000)
+    box: int = _param(9, 1, 63)
     fade_from: float = _param(4.0, 0.0, 255.0)
     fade_to: float = _param(6.0, 0.0, 255.0)
 

@@ -20,8 +20,6 @@ import numpy as np
 from .config import PhotometricConfig
 from .noise import estimate_noise
 
-#: Quantiles matched per channel (0, 1, ..., 100 %).
-QUANTILES = np.linspace(0.0, 100.0, 101)
 #: Fewer matched pixels than this and the views are left as they are.
 MIN_MATCHES = 1000
 #: The residual that noise alone leaves, per grey level of the views' estimated noise
@@ -60,21 +58,37 @@ def learn(left: np.ndarray, right: np.ndarray, disp: np.ndarray,
     ys, xs, xr = ys[inside], xs[inside], xr[inside]
     if len(ys) < MIN_MATCHES:
         return None
-    at_left = _channels(left)[ys, xs].astype(np.float32)
-    at_right = _channels(right)[ys, xr].astype(np.float32)
+    at_left = _channels(left)[ys, xs]
+    at_right = _channels(right)[ys, xr]
+    levels = np.arange(256)
     table = np.empty((256, at_left.shape[1]), dtype=np.uint8)
     for c in range(at_left.shape[1]):
-        q_left = np.percentile(at_left[:, c], QUANTILES)
-        q_right = np.percentile(at_right[:, c], QUANTILES)
-        # Strictly increasing for np.interp; a flat stretch (saturation) maps to its mean.
-        q_right = q_right + np.arange(len(QUANTILES)) * 1e-4
-        table[:, c] = np.clip(np.rint(np.interp(np.arange(256), q_right, q_left)), 0, 255)
-    mapped = np.take_along_axis(table, at_right.astype(np.int64), axis=0).astype(np.float32)
-    residual = float(np.median(np.abs(at_left - mapped).mean(axis=1)))
-    before = float(np.median(np.abs(at_left - at_right).mean(axis=1)))
+        # Histogram matching by mid-ranks: each right grey level goes to the left level at
+        # the same place in the matched pixels' distribution (counts are exact on uint8).
+        ranks_l = _mid_ranks(at_left[:, c])
+        present = np.bincount(at_left[:, c], minlength=256) > 0
+        table[:, c] = np.clip(np.rint(np.interp(_mid_ranks(at_right[:, c]),
+                                                ranks_l[present], levels[present])), 0, 255)
+    mapped = np.take_along_axis(table, at_right.astype(np.int64), axis=0)
+    residual = _median_channel_difference(at_left, mapped)
+    before = _median_channel_difference(at_left, at_right)
     noise = NOISE_RESIDUAL * (estimate_noise(left) + estimate_noise(right)) / 2
     return Correction(table=table, residual=residual, before=before, matches=len(ys),
                       noise=noise)
+
+
+def _mid_ranks(values: np.ndarray) -> np.ndarray:
+    """For each grey level, the middle of its share of ``values`` in the sorted order
+    (0..1): the empirical distribution at that level."""
+    counts = np.bincount(values, minlength=256).astype(np.float64)
+    return (np.cumsum(counts) - counts / 2) / len(values)
+
+
+def _median_channel_difference(a: np.ndarray, b: np.ndarray) -> float:
+    """Median over pixels of the mean over channels of |a - b| (uint8 arrays (N, C))."""
+    total = np.abs(a.astype(np.int16) - b.astype(np.int16)).sum(axis=1)
+    counts = np.cumsum(np.bincount(total))
+    return float(np.searchsorted(counts, len(total) / 2) / a.shape[1])
 
 
 def apply(right: np.ndarray, correction: Correction) -> np.ndarray:

@@ -9,6 +9,7 @@ import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 from . import (aggregation, cost, disparity, noise, optimization, photometric, pyramid,
@@ -154,24 +155,36 @@ def _correct_exposure(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: C
         small_l, small_r = pyramid.downsample(small_l), pyramid.downsample(small_r)
         if width <= cfg.photometric.max_width:
             break
-    # Census and gradient only (the colour term is what is in doubt), no refinement: the
-    # pixels that pass the left-right check are all that is used.
-    first_cfg = dataclasses.replace(
-        cfg, cost=dataclasses.replace(cfg.cost, lambda_ad=None),
-        consistency=dataclasses.replace(cfg.consistency, enabled=True),
-        voting=dataclasses.replace(cfg.voting, enabled=False),
-        fill=dataclasses.replace(cfg.fill, enabled=False),
-        discontinuity=dataclasses.replace(cfg.discontinuity, enabled=False),
-        subpixel=dataclasses.replace(cfg.subpixel, enabled=False, median=False))
-    first = _full_search_in_stripes(small_l, small_r, small_max, first_cfg)
-    matched = (first.labels == disparity.VALID) & np.isfinite(first.disparity)
-    correction = photometric.learn(small_l, small_r, first.disparity, matched)
+    first_disp, matched = _first_match(small_l, small_r, small_max, cfg)
+    correction = photometric.learn(small_l, small_r, first_disp, matched)
     if correction is None:
         return right, cfg, None
     weight = photometric.colour_weight(correction.excess, cfg.photometric)
     cfg = dataclasses.replace(cfg, cost=dataclasses.replace(
         cfg.cost, ad_weight=cfg.cost.ad_weight * weight))
     return photometric.apply(right, correction), cfg, correction
+
+
+def _first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """A quick match for the photometric statistics: census and gradient costs (the colour
+    term is what is in doubt) averaged over ``photometric.box`` square windows, winner
+    takes all in both views, the exact left-right check. Returns the left disparity and
+    the pixels that pass the check."""
+    grey_l, grey_r = to_grey(left), to_grey(right)
+    grad_l, _ = sensitivity.visual_sensitivity(grey_l)
+    grad_r, _ = sensitivity.visual_sensitivity(grey_r)
+    cost_cfg = dataclasses.replace(cfg.cost, lambda_ad=None)
+    volume = cost.cost_volume(left, right, cost.census_for(grey_l, cost_cfg),
+                              cost.census_for(grey_r, cost_cfg), grad_l, grad_r,
+                              n_disp=max_disp + 1, cfg=cost_cfg)
+    box = (cfg.photometric.box, cfg.photometric.box)
+    for first in range(0, volume.shape[2], 256):  # OpenCV filters at most 512 channels
+        part = np.ascontiguousarray(volume[:, :, first:first + 256])
+        volume[:, :, first:first + 256] = cv2.blur(part, box).reshape(part.shape)
+    disp_l, disp_r = disparity.winner_takes_all_both(volume)
+    labels = disparity.left_right_check(disp_l, disp_r, n_disp=max_disp + 1, tolerance=0)
+    return disp_l, labels == disparity.VALID
 
 
 @contextmanager
@@ -348,3 +361,4 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
 
     return MatchResult(disparity=result, labels=labels, seconds=seconds, config=cfg,
                        noise_sigma=noise_sigma)
+
