@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from .config import PhotometricConfig
@@ -93,11 +94,8 @@ def _median_channel_difference(a: np.ndarray, b: np.ndarray) -> float:
 
 def apply(right: np.ndarray, correction: Correction) -> np.ndarray:
     """The right view with each channel passed through the correction's table."""
-    out = np.empty_like(right)
-    source, target = _channels(right), _channels(out)
-    for c in range(source.shape[2]):
-        target[..., c] = correction.table[:, c][source[..., c]]
-    return out
+    table = correction.table.reshape(256, 1, -1)  # one column per channel, as cv2.LUT takes
+    return cv2.LUT(right, table).reshape(right.shape)
 
 
 def colour_weight(residual: float, cfg: PhotometricConfig) -> float:
