@@ -105,3 +105,14 @@ def test_verbose_run_reports_the_exposure_map(tmp_path):
     assert result.exit_code == 0, result.output
     line = next(t for t in result.output.splitlines() if t.startswith("exposure:"))
     assert "after the right view's colour map" in line and "colour term weight 1.00" in line
+
+
+def test_grey_views_get_a_one_channel_map():
+    import cv2  # noqa: PLC0415
+
+    pair = make_pair(width=240, height=180)
+    left = cv2.cvtColor(pair.left, cv2.COLOR_BGR2GRAY)
+    right = _exposed(cv2.cvtColor(pair.right, cv2.COLOR_BGR2GRAY) // 2 + 40)
+    result = pipeline.run(left, right, max_disp=pair.max_disp)
+    assert result.photometric.table.shape == (256, 1)
+    assert result.photometric.before > 20 and result.photometric.residual < 3

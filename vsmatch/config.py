@@ -176,8 +176,8 @@ class PhotometricConfig:
     enabled: bool = _param(False)
     max_width: int = _param(400, 32, 100000)
     box: int = _param(9, 1, 63)
-    fade_from: float = _param(4.0, 0.0, 255.0)
-    fade_to: float = _param(6.0, 0.0, 255.0)
+    fade_from: float = _param(5.0, 0.0, 255.0)
+    fade_to: float = _param(10.0, 0.0, 255.0)
 
 
 @dataclass(frozen=True)
