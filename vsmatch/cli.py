@@ -334,9 +334,10 @@ def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
               help="Search each scene's official range, or the one estimated from the "
                    "pair as 'vsmatch run' does without --max-disp.")
 @click.option("--ablation", is_flag=True,
-              help="Instead of --method rows: the refinement chain of the config given by "
-                   "--method (default: 'default') built up one stage at a time, and the "
-                   "direction factor kappa switched.")
+              help="Instead of --method rows: the refinement chain and the exposure "
+                   "correction of the config given by --method (default: 'default') built "
+                   "up one stage at a time, then one switch changed at a time (scanline "
+                   "directions, shrinking arm threshold, filling, direction factor kappa).")
 @click.option("--noise", default=None, metavar="LEVELS",
               help="Also run with Gaussian noise of sigma = level x 255 added to each view, "
                    "e.g. 0.02,0.05,0.10,0.15 (EVALUATION.md).")
