@@ -1,9 +1,12 @@
 """The photometric stage: learning the right view's colour map from matched pixels."""
 
+import cv2
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
 from vsmatch import photometric, pipeline
+from vsmatch.cli import main
 from vsmatch.config import ConfigError, PhotometricConfig, config_from_dict, load_config
 from vsmatch.datasets import load_dataset
 from vsmatch.evaluation import score_scene, scoring_for
@@ -91,11 +94,6 @@ def test_exposure_and_lighting_scenes_gain(data_dir, name, with_stage, without):
 
 
 def test_verbose_run_reports_the_exposure_map(tmp_path):
-    import cv2  # noqa: PLC0415
-    from click.testing import CliRunner  # noqa: PLC0415
-
-    from vsmatch.cli import main  # noqa: PLC0415
-
     pair = make_pair(width=240, height=180)
     cv2.imwrite(str(tmp_path / "l.png"), pair.left)
     cv2.imwrite(str(tmp_path / "r.png"), _exposed(pair.right // 2 + 40))
@@ -108,8 +106,6 @@ def test_verbose_run_reports_the_exposure_map(tmp_path):
 
 
 def test_grey_views_get_a_one_channel_map():
-    import cv2  # noqa: PLC0415
-
     pair = make_pair(width=240, height=180)
     left = cv2.cvtColor(pair.left, cv2.COLOR_BGR2GRAY)
     right = _exposed(cv2.cvtColor(pair.right, cv2.COLOR_BGR2GRAY) // 2 + 40)

@@ -14,7 +14,7 @@ import numpy as np
 
 from . import (aggregation, cost, disparity, noise, optimization, photometric, pyramid,
                refinement, sensitivity)
-from .config import Config, load_config
+from .config import Config, CostConfig, load_config
 from .disparity import INVALID_DISPARITY
 from .images import to_grey
 
@@ -129,16 +129,15 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
                    cfg: Config) -> MatchResult:
     """Disparities ``0 .. max_disp``: the exposure corrected when asked, then
     coarse-to-fine when a row is too wide a search."""
+    seconds: dict[str, float] = {}
     correction = None
     if cfg.photometric.enabled:
-        seconds: dict[str, float] = {}
         with _stage(seconds, "photometric"):
             right, cfg, correction = _correct_exposure(left, right, max_disp, cfg)
     levels = pyramid.coarse_levels(left.shape[1], max_disp + 1, cfg.pyramid.max_row_cells)
     result = _coarse_to_fine(left, right, max_disp, cfg, levels)
-    if cfg.photometric.enabled:
-        result.seconds = {**seconds, **result.seconds}
-        result.photometric = correction
+    result.seconds = {**seconds, **result.seconds}
+    result.photometric = correction
     return result
 
 
@@ -171,13 +170,8 @@ def _first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
     term is what is in doubt) averaged over ``photometric.box`` square windows, winner
     takes all in both views, the exact left-right check. Returns the left disparity and
     the pixels that pass the check."""
-    grey_l, grey_r = to_grey(left), to_grey(right)
-    grad_l, _ = sensitivity.visual_sensitivity(grey_l)
-    grad_r, _ = sensitivity.visual_sensitivity(grey_r)
-    cost_cfg = dataclasses.replace(cfg.cost, lambda_ad=None)
-    volume = cost.cost_volume(left, right, cost.census_for(grey_l, cost_cfg),
-                              cost.census_for(grey_r, cost_cfg), grad_l, grad_r,
-                              n_disp=max_disp + 1, cfg=cost_cfg)
+    volume, _, _ = _matching_costs(left, right, max_disp + 1,
+                                   dataclasses.replace(cfg.cost, lambda_ad=None))
     box = (cfg.photometric.box, cfg.photometric.box)
     for first in range(0, volume.shape[2], 256):  # OpenCV filters at most 512 channels
         part = np.ascontiguousarray(volume[:, :, first:first + 256])
@@ -185,6 +179,20 @@ def _first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
     disp_l, disp_r = disparity.winner_takes_all_both(volume)
     labels = disparity.left_right_check(disp_l, disp_r, n_disp=max_disp + 1, tolerance=0)
     return disp_l, labels == disparity.VALID
+
+
+def _matching_costs(left: np.ndarray, right: np.ndarray, n_disp: int, cost_cfg: CostConfig
+                    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray],
+                               tuple[np.ndarray, np.ndarray]]:
+    """The cost volume (ALGORITHM.md §1-2) and each view's gradient magnitude and
+    direction, which the arms need too."""
+    grey_l, grey_r = to_grey(left), to_grey(right)
+    sens_l = sensitivity.visual_sensitivity(grey_l)
+    sens_r = sensitivity.visual_sensitivity(grey_r)
+    volume = cost.cost_volume(left, right, cost.census_for(grey_l, cost_cfg),
+                              cost.census_for(grey_r, cost_cfg), sens_l[0], sens_r[0],
+                              n_disp=n_disp, cfg=cost_cfg)
+    return volume, sens_l, sens_r
 
 
 @contextmanager
@@ -297,12 +305,8 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
             right = sensitivity.presmooth(right, cfg.cost.presmooth_sigma)
 
     with stage("cost"):
-        grey_l, grey_r = to_grey(left), to_grey(right)
-        grad_l, theta_l = sensitivity.visual_sensitivity(grey_l)
-        grad_r, theta_r = sensitivity.visual_sensitivity(grey_r)
-        volume = cost.cost_volume(left, right, cost.census_for(grey_l, cfg.cost),
-                                  cost.census_for(grey_r, cfg.cost), grad_l, grad_r,
-                                  n_disp=n_disp, cfg=cfg.cost)
+        volume, (grad_l, theta_l), (grad_r, theta_r) = _matching_costs(left, right, n_disp,
+                                                                       cfg.cost)
 
     arms_l = arms_r = None
     if cfg.aggregation.iterations > 0 or cfg.voting.enabled:
