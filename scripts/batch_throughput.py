@@ -50,13 +50,13 @@ def main() -> None:
                 out = Path(tmp) / "out"
                 shutil.rmtree(out, ignore_errors=True)
                 out.mkdir()
-                jobs = batch.find_pairs(source, out, max_disp=None, suffix=".pfm")
+                jobs, _ = batch.find_pairs(source, out, max_disp=None, suffix=".pfm")
                 start = time.perf_counter()
                 first: list[float] = []
                 with make_executor(**mode) as executor:
                     failures = batch.run_batch(
                         jobs, config, executor=executor,
-                        on_done=lambda job, error: first or first.append(time.perf_counter()))
+                        on_done=lambda job, outcome: first or first.append(time.perf_counter()))
                 total = time.perf_counter() - start
                 assert not failures, failures
                 print(f"{name:<22}{len(jobs)} pairs in {total:6.2f} s "

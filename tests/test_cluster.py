@@ -55,8 +55,10 @@ def test_recordings_are_found_as_paired_folders(tmp_path, layout):
     write_recording(tmp_path / "drive", 3, size=(40, 60), layout=layout)
     (tmp_path / "drive" / layout[0] / "000009_10.png").write_bytes(b"")  # no right frame
     (tmp_path / "drive" / layout[0] / "notes.txt").write_text("not a frame")
-    jobs = batch.find_pairs(tmp_path / "drive", tmp_path / "out", max_disp=None, suffix=".png")
+    jobs, unpaired = batch.find_pairs(tmp_path / "drive", tmp_path / "out", max_disp=None,
+                                      suffix=".png")
     assert [j.output.name for j in jobs] == ["000000_10.png", "000001_10.png", "000002_10.png"]
+    assert [p.name for p in unpaired] == ["000009_10.png"]
     assert all(j.right.parent.name in layout[1] and j.left.name == j.right.name for j in jobs)
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import functools
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,6 +39,50 @@ class PairJob:
     right: Path
     output: Path
     max_disp: int | None  # None: estimated from the pair
+    source: str = ""  # where the job was listed ("pairs.csv, line 3"), for messages
+
+    def describe(self) -> str:
+        return self.source or str(self.left)
+
+
+@dataclass(frozen=True)
+class PairOutcome:
+    """What one pair gave: an error message (None on success), the range and seconds."""
+
+    error: str | None
+    min_disp: int | None = None
+    max_disp: int | None = None
+    seconds: float = 0.0
+
+
+def check_plan(jobs: list[PairJob]) -> None:
+    """Refuse, before any work, a plan in which an output names any row's input (also
+    through links) or two rows name one output; the message names both rows."""
+    inputs = [(job, path) for job in jobs for path in (job.left, job.right)]
+    seen: dict[tuple, PairJob] = {}
+    by_name: dict[Path, PairJob] = {}
+    for job in jobs:
+        for other, path in inputs:
+            if io.same_file(job.output, path):
+                raise BatchError(f"{job.describe()}: the output {job.output} would overwrite the input "
+                                 f"{path} of {other.describe()}")
+        key = _file_key(job.output)
+        earlier = by_name.get(job.output.resolve()) or seen.get(key)
+        if earlier is not None:
+            raise BatchError(f"{job.describe()} and {earlier.describe()} both write "
+                             f"{job.output}")
+        by_name[job.output.resolve()] = job
+        if key is not None:
+            seen[key] = job
+
+
+def _file_key(path: Path) -> tuple | None:
+    """(device, inode) of an existing file: the same file under two names (hard links)."""
+    try:
+        info = path.stat()
+    except OSError:
+        return None
+    return info.st_dev, info.st_ino
 
 
 def read_pair_list(csv_path: str | Path, default_max_disp: int | None) -> list[PairJob]:
@@ -48,7 +93,7 @@ def read_pair_list(csv_path: str | Path, default_max_disp: int | None) -> list[P
     base = csv_path.parent
     jobs = []
     try:
-        with csv_path.open(newline="", encoding="utf-8") as fh:
+        with csv_path.open(newline="", encoding="utf-8-sig") as fh:  # a BOM is dropped
             rows = list(csv.reader(fh))
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise BatchError(f"{csv_path}: cannot read the pair list ({exc})") from None
@@ -62,7 +107,7 @@ def read_pair_list(csv_path: str | Path, default_max_disp: int | None) -> list[P
         if len(row) == 4 and row[3]:
             max_disp = _max_disp_cell(row[3], f"{csv_path}, line {number}")
         left, right, output = (base / cell for cell in row[:3])
-        jobs.append(PairJob(left, right, output, max_disp))
+        jobs.append(PairJob(left, right, output, max_disp, f"{csv_path}, line {number}"))
     return jobs
 
 
@@ -87,15 +132,16 @@ def _image_with_stem(folder: Path, stem: str) -> Path | None:
 
 
 def find_pairs(folder: str | Path, out_dir: str | Path, *, max_disp: int | None,
-               suffix: str = ".pfm") -> list[PairJob]:
+               suffix: str = ".pfm") -> tuple[list[PairJob], list[Path]]:
     """The pairs in ``folder``: the frames of a recording (:func:`recording_pairs`), else
     each sub-folder holding a pair named as in :data:`PAIR_NAMES`, and files named
     ``NAME_left`` / ``NAME_right`` (or ``_L`` / ``_R``). Each pair's output is
-    ``out_dir/NAME`` + ``suffix``."""
+    ``out_dir/NAME`` + ``suffix``. Also returns a recording's frames that have no
+    partner in the other view."""
     folder, out_dir = Path(folder), Path(out_dir)
-    jobs = recording_pairs(folder, out_dir, max_disp=max_disp, suffix=suffix)
-    if jobs:
-        return jobs
+    jobs, unpaired = recording_pairs(folder, out_dir, max_disp=max_disp, suffix=suffix)
+    if jobs or unpaired:
+        return jobs, unpaired
     for sub in sorted(p for p in folder.iterdir() if p.is_dir()):
         for left_stem, right_stem in PAIR_NAMES:
             left, right = _image_with_stem(sub, left_stem), _image_with_stem(sub, right_stem)
@@ -111,66 +157,86 @@ def find_pairs(folder: str | Path, out_dir: str | Path, *, max_disp: int | None,
                 right = _image_with_stem(folder, name + right_tag)
                 if right:
                     jobs.append(PairJob(path, right, out_dir / f"{name}{suffix}", max_disp))
-    return jobs
+    return jobs, []
 
 
 def recording_pairs(folder: Path, out_dir: Path, *, max_disp: int | None,
-                    suffix: str) -> list[PairJob]:
+                    suffix: str) -> tuple[list[PairJob], list[Path]]:
     """The frames of a recording in ``folder`` (see :data:`PAIRED_FOLDERS`): each left
-    image with a right image of the same name, in name order; outputs named after them."""
+    image with a right image of the same name, in name order, outputs named after them;
+    and the frames of either view that have no partner in the other."""
     for left_name, right_name in PAIRED_FOLDERS:
         left_dir, right_dir = folder / left_name, folder / right_name
         if left_dir.is_dir() and right_dir.is_dir():
-            frames = sorted(p for p in left_dir.iterdir()
-                            if p.suffix.lower() in IMAGE_EXTENSIONS
-                            and (right_dir / p.name).is_file())
-            return [PairJob(p, right_dir / p.name, out_dir / f"{p.stem}{suffix}", max_disp)
-                    for p in frames]
-    return []
+            lefts, rights = (
+                {p.name: p for p in d.iterdir() if p.suffix.lower() in IMAGE_EXTENSIONS}
+                for d in (left_dir, right_dir))
+            jobs = [PairJob(lefts[name], rights[name],
+                            out_dir / f"{lefts[name].stem}{suffix}", max_disp)
+                    for name in sorted(lefts.keys() & rights.keys())]
+            unpaired = sorted(lefts[n] for n in lefts.keys() - rights.keys()) + sorted(
+                rights[n] for n in rights.keys() - lefts.keys())
+            return jobs, unpaired
+    return [], []
 
 
-def match_pair(job: PairJob, config: Config) -> None:
-    """Read, match and write one pair; raises with a one-line message on failure."""
+def match_pair(job: PairJob, config: Config) -> PairOutcome:
+    """Read, match and write one pair; raises with a one-line message on failure. A
+    range a PNG output cannot hold is refused before the match."""
+    start = time.perf_counter()
     io.check_distinct_paths([job.left, job.right], [job.output])
-    left, right = io.read_pair(job.left, job.right)
-    max_disp = job.max_disp
+    if job.max_disp is not None:
+        _check_png_range(job.output, 0, job.max_disp)
+    left, right = io.read_pair(job.left, job.right, max_mb=config.memory.max_mb,
+                               max_megapixels=config.memory.max_megapixels)
+    min_disp, max_disp = 0, job.max_disp
     try:
         if max_disp is None:
-            max_disp = estimate_disparity_range(left, right).max_disp
-        pipeline.check_pair(left, right, max_disp, config)
+            found = estimate_disparity_range(left, right)
+            min_disp, max_disp = found.min_disp, found.max_disp
+        _check_png_range(job.output, min_disp, max_disp)
+        pipeline.check_pair(left, right, max_disp, config, min_disp)
     except ValueError as exc:
         raise ValueError(f"{job.left}: {exc}") from None
-    disp = pipeline.match(left, right, max_disp=max_disp, config=config)
+    disp = pipeline.match(left, right, max_disp=max_disp, min_disp=min_disp, config=config)
     io.write_disparity(job.output, disp)
+    return PairOutcome(None, min_disp, max_disp, time.perf_counter() - start)
 
 
-def _match_pair_quietly(job: PairJob, *, config: Config) -> str | None:
-    """:func:`match_pair` in a worker: the error message, or None."""
+def _check_png_range(path: Path, min_disp: int, max_disp: int) -> None:
+    problem = io.png_range_problem(path, min_disp, max_disp)
+    if problem is not None:
+        raise ValueError(problem)
+
+
+def _match_pair_quietly(job: PairJob, *, config: Config) -> PairOutcome:
+    """:func:`match_pair` in a worker: what it gave, its error as a message."""
     try:
-        match_pair(job, config)
+        return match_pair(job, config)
     except (ValueError, OSError) as exc:
-        return " ".join(str(exc).split())
-    return None
+        return PairOutcome(" ".join(str(exc).split()))
 
 
 def run_batch(jobs: list[PairJob], config: Config, *, executor: Executor | None = None,
-              on_done: Callable[[PairJob, str | None], None] | None = None
+              on_done: Callable[[PairJob, PairOutcome], None] | None = None
               ) -> list[tuple[PairJob, str]]:
     """Match every job; returns the failures as ``(job, message)``, in job order.
 
     The pairs run on ``executor`` (default: one after the other in this process), one
-    task per pair. ``on_done(job, error)`` follows each pair as it completes. Temporary
+    task per pair. ``on_done(job, outcome)`` follows each pair as it completes. Temporary
     files that a killed task left beside its output are removed at the end.
     """
     failures = {}
     task = functools.partial(_match_pair_quietly, config=config)
     try:
         with executor or SerialExecutor() as runner:
-            for job, error in runner.map_unordered(task, jobs):
-                if error is not None:
-                    failures[job] = error
+            for job, outcome in runner.map_unordered(task, jobs):
+                if isinstance(outcome, str):  # the executor's word for a task that raised
+                    outcome = PairOutcome(outcome)
+                if outcome.error is not None:
+                    failures[job] = outcome.error
                 if on_done is not None:
-                    on_done(job, error)
+                    on_done(job, outcome)
     finally:
         for job in jobs:
             io.remove_stale_temporaries(job.output)

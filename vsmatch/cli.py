@@ -1,16 +1,20 @@
 """The ``vsmatch`` command: thin wrappers over the library.
 
 Exit status: 0 success; 1 a problem with the inputs, data, config or outputs (one line on
-stderr, no traceback, no output file left behind); 2 a usage error (bad option or
-argument); 130 interrupted (Ctrl-C).
+stderr, no traceback, no output file left behind), or an unexpected error (one line;
+``--debug`` or ``VSMATCH_DEBUG=1`` shows the traceback); 2 a usage error (bad option or
+argument); 130 interrupted (Ctrl-C); 143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
 
 import functools
 import json
+import math
 import os
+import signal
 import sys
+import threading
 from pathlib import Path
 
 import click
@@ -23,13 +27,39 @@ from .peers import PEER_METHODS
 EXPECTED_ERRORS = (ConfigError, io.ImageError, datasets.DatasetError, batch.BatchError,
                    ExecutorError, ValueError, OSError)
 
-#: Exit status after Ctrl-C (128 + SIGINT), as shells report it.
+#: Exit status after Ctrl-C (128 + SIGINT) and SIGTERM (128 + 15), as shells report them.
 EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread so that it unwinds like Ctrl-C: temporaries
+    are removed and the worker processes are ended on the way out."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
+def _stop(exc: BaseException) -> None:
+    """The one line and exit status of an interruption."""
+    if isinstance(exc, Terminated):
+        click.echo("vsmatch: terminated", err=True)
+        sys.exit(EXIT_TERMINATED)
+    click.echo("vsmatch: interrupted", err=True)
+    sys.exit(EXIT_INTERRUPTED)
+
+
+def _debugging() -> bool:
+    ctx = click.get_current_context(silent=True)
+    flag = bool(ctx and (ctx.find_root().obj or {}).get("debug"))
+    return flag or os.environ.get("VSMATCH_DEBUG", "") not in ("", "0")
 
 
 def friendly_errors(func):
-    """Turn the library's expected errors into one-line ClickExceptions (exit 1), and
-    Ctrl-C into a one-line notice with exit status 130."""
+    """Turn the library's expected errors into one-line ClickExceptions (exit 1), any
+    other exception into one line naming the command (the traceback under --debug), and
+    Ctrl-C or SIGTERM into a one-line notice with exit status 130 or 143."""
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         try:
@@ -37,11 +67,68 @@ def friendly_errors(func):
         except click.ClickException:
             raise
         except EXPECTED_ERRORS as exc:
+            if _debugging():
+                raise
             raise click.ClickException(_one_line(exc)) from None
-        except KeyboardInterrupt:
-            click.echo("vsmatch: interrupted", err=True)
-            sys.exit(EXIT_INTERRUPTED)
+        except KeyboardInterrupt as exc:
+            _stop(exc)
+        except (Exception, RecursionError, MemoryError) as exc:
+            if _debugging():
+                raise
+            ctx = click.get_current_context(silent=True)
+            where = ctx.command_path if ctx is not None else "vsmatch"
+            raise click.ClickException(
+                f"{where}: unexpected {type(exc).__name__}: {_one_line(exc)[:300]} "
+                "(--debug shows the traceback)") from None
     return wrapper
+
+
+def verbosity_options(func):
+    """-v, -q and --debug after the command name too (``vsmatch run ... -v``)."""
+    def setter(key):
+        def callback(ctx, param, value):
+            if value:
+                root = ctx.find_root().obj
+                root[key] = True
+                if key == "quiet":
+                    root["verbose"] = False
+                elif key == "verbose":
+                    root["verbose"] = not root.get("quiet")
+        return callback
+    for names, key, text in ((("-q", "--quiet"), "quiet", "Print only errors."),
+                             (("-v", "--verbose"), "verbose", "Print more (stage times, "
+                              "the range found, ...) on stderr."),
+                             (("--debug",), "debug", "Show the traceback of an "
+                              "unexpected error.")):
+        func = click.option(*names, key + "_flag", is_flag=True, expose_value=False,
+                            callback=setter(key), help=text)(func)
+    return func
+
+
+class Finite(click.ParamType):
+    """A finite float (nan and inf refused), optionally above a bound."""
+
+    name = "NUMBER"
+
+    def __init__(self, positive: bool = False):
+        self.positive = positive
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float) and math.isfinite(value):
+            number = value
+        else:
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                self.fail(f"'{value}' is not a number", param, ctx)
+            if not math.isfinite(number):
+                self.fail(f"'{value}' is not a finite number", param, ctx)
+        if self.positive and number <= 0:
+            self.fail(f"{number:g} must be greater than 0", param, ctx)
+        return number
+
+
+FINITE, POSITIVE = Finite(), Finite(positive=True)
 
 
 def _one_line(exc: BaseException) -> str:
@@ -124,9 +211,17 @@ class OneLineErrors(click.Group):
         except click.ClickException as exc:
             exc.show()
             sys.exit(exc.exit_code)
-        except (click.Abort, KeyboardInterrupt):
-            click.echo("vsmatch: interrupted", err=True)
-            sys.exit(EXIT_INTERRUPTED)
+        except KeyboardInterrupt as exc:
+            _stop(exc)
+        except click.Abort:
+            _stop(KeyboardInterrupt())
+        except (Exception, RecursionError, MemoryError) as exc:
+            # Outside a command (option parsing, start-up): still one line.
+            if os.environ.get("VSMATCH_DEBUG", "") not in ("", "0") or "--debug" in sys.argv:
+                raise
+            click.echo(f"vsmatch: unexpected {type(exc).__name__}: {_one_line(exc)[:300]} "
+                       "(--debug shows the traceback)", err=True)
+            sys.exit(1)
         sys.exit(result if isinstance(result, int) else 0)
 
 
@@ -135,8 +230,10 @@ class OneLineErrors(click.Group):
 @click.option("-q", "--quiet", is_flag=True, help="Print only errors.")
 @click.option("-v", "--verbose", is_flag=True,
               help="Also print stage times and the estimated noise (on stderr).")
+@click.option("--debug", is_flag=True, help="Show the traceback of an unexpected error "
+              "(also VSMATCH_DEBUG=1).")
 @click.pass_context
-def main(ctx: click.Context, quiet: bool, verbose: bool) -> None:
+def main(ctx: click.Context, quiet: bool, verbose: bool, debug: bool) -> None:
     """Dense stereo matching guided by visual sensitive information.
 
     Wang, Pathan and Dev, "Stereo Matching Based on Visual Sensitive Information",
@@ -146,7 +243,10 @@ def main(ctx: click.Context, quiet: bool, verbose: bool) -> None:
     ctx.ensure_object(dict)
     ctx.obj["quiet"] = quiet
     ctx.obj["verbose"] = verbose and not quiet
+    ctx.obj["debug"] = debug
     _silence_opencv()
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _on_sigterm)
 
 
 def _silence_opencv() -> None:
@@ -186,26 +286,30 @@ def _writable(folder: Path) -> bool:
 @click.option("--calib", type=click.Path(dir_okay=False), default=None,
               help="Calibration: a Middlebury 2014 calib.txt or a KITTI "
                    "calib_cam_to_cam.txt (for --depth and --cloud, and the range).")
-@click.option("--focal", type=float, default=None, help="Focal length in pixels "
+@click.option("--focal", type=POSITIVE, default=None, help="Focal length in pixels "
               "(instead of --calib; with --baseline).")
-@click.option("--baseline", type=float, default=None,
+@click.option("--baseline", type=POSITIVE, default=None,
               help="Baseline, in the unit depth should come out in.")
-@click.option("--cx", type=float, default=None, help="Principal point x (default: centre).")
-@click.option("--cy", type=float, default=None, help="Principal point y (default: centre).")
-@click.option("--doffs", type=float, default=None,
+@click.option("--cx", type=FINITE, default=None, help="Principal point x (default: centre).")
+@click.option("--cy", type=FINITE, default=None, help="Principal point y (default: centre).")
+@click.option("--doffs", type=FINITE, default=None,
               help="x-difference of the principal points, right minus left (default 0).")
 @click.option("--depth", "depth_path", type=click.Path(dir_okay=False), default=None,
               help="Also write depth f*B/(d + doffs) here (.pfm, inf = unknown).")
 @click.option("--cloud", "cloud_path", type=click.Path(dir_okay=False), default=None,
               help="Also write the coloured point cloud here (.ply, binary).")
-@click.option("--max-depth", type=click.FloatRange(min=0, min_open=True), default=None,
+@click.option("--max-depth", type=POSITIVE, default=None,
               help="Leave points farther than this out of the cloud.")
+@click.option("--preview", "preview_path", type=click.Path(dir_okay=False), default=None,
+              help="Also write the disparity as a colour image here (.png or .jpg; "
+                   "invalid pixels black).")
 @config_option
 @max_memory_option
+@verbosity_options
 @click.pass_context
 @friendly_errors
 def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx, cy,
-        doffs, depth_path, cloud_path, max_depth, config, max_memory):
+        doffs, depth_path, cloud_path, max_depth, preview_path, config, max_memory):
     """Compute the left-view disparity of a rectified stereo pair.
 
     \b
@@ -219,44 +323,82 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx
         raise click.BadParameter(f"'{depth_path}' must end in .pfm", param_hint="'--depth'")
     if cloud_path is not None and Path(cloud_path).suffix.lower() != ".ply":
         raise click.BadParameter(f"'{cloud_path}' must end in .ply", param_hint="'--cloud'")
-    for extra in (depth_path, cloud_path):
+    if preview_path is not None and Path(preview_path).suffix.lower() not in (".png", ".jpg"):
+        raise click.BadParameter(f"'{preview_path}' must end in .png or .jpg",
+                                 param_hint="'--preview'")
+    outputs = [output, depth_path, cloud_path, preview_path]
+    for extra in outputs[1:]:
         if extra is not None:
             _check_writable_folder(Path(extra))
-    io.check_distinct_paths([left, right, calib], [output, depth_path, cloud_path])
+    io.check_distinct_paths([left, right, calib], outputs)
     camera = _calibration(calib, focal, baseline, cx, cy, doffs)
     if (depth_path or cloud_path) and camera is None:
         raise click.UsageError("--depth and --cloud need --calib, or --focal and --baseline")
     cfg = _with_budget(load_config(config), max_memory)
-    left_image, right_image = io.read_pair(left, right)
+    # Refused before anything is decoded: a range a PNG cannot hold, an image too large.
+    if max_disp is not None:
+        _check_png_range(out, min_disp, max_disp)
+    left_image, right_image = io.read_pair(left, right, max_mb=cfg.memory.max_mb,
+                                           max_megapixels=cfg.memory.max_megapixels)
     width = left_image.shape[1]
-    if max_disp is None and camera is not None and camera.ndisp is not None:
-        max_disp = min_disp + camera.ndisp - 1
+    if max_disp is None and camera is not None:
+        ndisp = camera.search_range_for(width)
+        if ndisp is not None:
+            max_disp = min_disp + ndisp - 1
+        elif camera.ndisp is not None:
+            _verbose(ctx, f"{calib}: ndisp={camera.ndisp} is half the image width or more, "
+                          "taken as 'unknown': finding the range from the pair")
     if max_disp is None:
         found = _estimate_range(left_image, right_image, left)
         _verbose(ctx, f"{left}: {found.describe()}")
+        min_disp = min(min_disp, found.min_disp)
         max_disp = max(found.max_disp, min_disp + 1)
     elif max_disp >= width:
         raise click.BadParameter(f"{max_disp} must be less than the image width ({width})",
                                  param_hint="'--max-disp'")
+    _check_png_range(out, min_disp, max_disp)
     try:
         pipeline.check_pair(left_image, right_image, max_disp, cfg, min_disp)
     except ValueError as exc:
         raise click.ClickException(f"{left}: {exc}") from None
     _verbose(ctx, f"searching disparities {min_disp}..{max_disp}")
+    _announce_compilation(ctx)
     result = pipeline.run(left_image, right_image, max_disp=max_disp, min_disp=min_disp,
                           config=cfg)
-    io.write_disparity(out, result.disparity)
-    if depth_path is not None:
-        io.write_depth(depth_path, geometry.depth_from_disparity(result.disparity, camera))
-    if cloud_path is not None:
-        points, colours = geometry.point_cloud(result.disparity, left_image, camera,
-                                               max_depth=max_depth)
-        io.write_point_cloud(cloud_path, geometry.ply_vertices(points, colours))
-        _verbose(ctx, f"{len(points)} points in the cloud")
+    for path in outputs:
+        if path is not None:
+            io.remove_stale_temporaries(path)
+    with io.all_or_none():  # every output of the run, or none of them
+        io.write_disparity(out, result.disparity)
+        if depth_path is not None:
+            io.write_depth(depth_path, geometry.depth_from_disparity(result.disparity, camera))
+        if cloud_path is not None:
+            points, colours = geometry.point_cloud(result.disparity, left_image, camera,
+                                                   max_depth=max_depth)
+            io.write_point_cloud(cloud_path, geometry.ply_vertices(points, colours))
+            _verbose(ctx, f"{len(points)} points in the cloud")
+        if preview_path is not None:
+            io.imwrite_atomic(preview_path, io.colour_disparity(result.disparity, max_disp,
+                                                                min_disp))
     _report_run(ctx, result)
-    for path in (out, depth_path, cloud_path):
+    for path in outputs:
         if path is not None:
             _echo(ctx, f"wrote {path}")
+
+
+def _check_png_range(path, min_disp: int, max_disp: int) -> None:
+    problem = io.png_range_problem(path, min_disp, max_disp)
+    if problem is not None:
+        raise click.ClickException(problem)
+
+
+def _announce_compilation(ctx: click.Context) -> None:
+    """One line before the first run compiles the kernels (20-40 s of silence else)."""
+    from ._kernels import cache_is_cold
+
+    if cache_is_cold():
+        _echo(ctx, "compiling the kernels once (about 30 s; later runs start at once)",
+              err=True)
 
 
 def _check_writable_folder(path: Path) -> None:
@@ -490,8 +632,10 @@ def bench_command(ctx, data_root, config, repeats, no_cold, no_size, json_path):
                    "local:N to start N worker processes here (pip install "
                    "'vsmatch[cluster]'). Inputs and outputs must be at the same paths on "
                    "every worker.")
-@click.option("--overwrite", is_flag=True, help="Match pairs whose output already exists.")
+@click.option("--overwrite", is_flag=True, help="Match pairs whose output already exists "
+              "(only earlier outputs are replaced: an output may never name an input).")
 @max_memory_option
+@verbosity_options
 @click.pass_context
 @friendly_errors
 def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, overwrite,
@@ -520,33 +664,45 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
 
     cfg = _with_budget(load_config(config), max_memory)
     src = Path(source)
+    unpaired = []
     if src.is_dir():
-        Path(out_dir).mkdir(parents=True, exist_ok=True)
-        jobs_list = batch.find_pairs(src, out_dir, max_disp=max_disp, suffix=f".{fmt}")
+        jobs_list, unpaired = batch.find_pairs(src, out_dir, max_disp=max_disp,
+                                               suffix=f".{fmt}")
     elif src.is_file():
         jobs_list = batch.read_pair_list(src, max_disp)
     else:
         raise click.ClickException(f"{src}: no such file or folder")
-    if not jobs_list:
+    if not jobs_list and not unpaired:
         raise click.ClickException(f"{src}: no stereo pairs found")
+    batch.check_plan(jobs_list)  # before any work: no output over an input or another output
+    if jobs_list and src.is_dir():
+        Path(out_dir).mkdir(parents=True, exist_ok=True)
     todo = [j for j in jobs_list if overwrite or not j.output.exists()]
     skipped = len(jobs_list) - len(todo)
     quiet = ctx.find_root().obj.get("quiet")
     failures = []
     if todo:
+        _announce_compilation(ctx)
         # The executor first: a cluster that cannot be had fails before any output.
         with make_executor(jobs, scheduler) as executor, \
                 tqdm(total=len(todo), disable=quiet, unit="pair", leave=False) as bar:
-            def done(job: batch.PairJob, error: str | None) -> None:
+            def done(job: batch.PairJob, outcome: batch.PairOutcome) -> None:
                 bar.set_postfix_str(job.output.name)
                 bar.update(1)
+                if outcome.error is None:
+                    _verbose(ctx, f"{job.describe()}: disparities {outcome.min_disp}.."
+                                  f"{outcome.max_disp}, {outcome.seconds:.2f} s")
             failures = batch.run_batch(todo, cfg, executor=executor, on_done=done)
-    _echo(ctx, f"matched {len(todo) - len(failures)} of {len(jobs_list)} pairs"
+    total = len(jobs_list) + len(unpaired)
+    failed = len(failures) + len(unpaired)
+    _echo(ctx, f"matched {len(todo) - len(failures)} of {total} pairs"
                + (f", skipped {skipped} with existing output" if skipped else "")
-               + (f", {len(failures)} failed" if failures else ""))
+               + (f", {failed} failed" if failed else ""))
+    for path in unpaired:
+        click.echo(f"failed: {path}: no frame of the same name in the other view", err=True)
     for job, error in failures:
         click.echo(f"failed: {job.left}: {error}", err=True)
-    if failures:
+    if failed:
         sys.exit(1)
 
 

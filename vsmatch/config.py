@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -188,6 +189,8 @@ class MemoryConfig:
 
     max_mb: int = _param(1024, 16, 1 << 20)
     overlap: int = _param(48, 0, 4096)
+    # Views larger than this are refused from their header, before decoding.
+    max_megapixels: float = _param(200.0, 0.01, 10000.0)
 
 
 @dataclass(frozen=True)
@@ -215,6 +218,22 @@ class Config:
 _SECTIONS = {f.name: f.default_factory for f in dataclasses.fields(Config)}
 
 
+#: A config file larger than this is refused unread: the bundled ones are under 4 kB, and
+#: a config names at most ~70 values.
+MAX_CONFIG_BYTES = 64 * 1024
+#: Values are quoted in messages up to this many characters (a YAML alias can make a
+#: 300-byte value print as gigabytes).
+MAX_QUOTED = 40
+
+
+def quote(value: Any) -> str:
+    """A short, size-limited ``repr`` of a value for a one-line message."""
+    if isinstance(value, (dict, list, tuple)):
+        return f"a {type(value).__name__}"  # never walked: it may be an alias bomb
+    text = repr(value)
+    return text if len(text) <= MAX_QUOTED else text[:MAX_QUOTED - 3] + "..."
+
+
 def _check_value(key: str, spec: dataclasses.Field, value: Any) -> Any:
     meta = spec.metadata
     kind = _field_kind(spec)
@@ -224,23 +243,25 @@ def _check_value(key: str, spec: dataclasses.Field, value: Any) -> Any:
         raise ConfigError(f"config value {key} must not be empty")
     if kind is bool:
         if not isinstance(value, bool):
-            raise ConfigError(f"config value {key} = {value!r} must be true or false")
+            raise ConfigError(f"config value {key} = {quote(value)} must be true or false")
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ConfigError(f"config value {key} = {value!r} must be a number")
+        raise ConfigError(f"config value {key} = {quote(value)} must be a number")
+    if not math.isfinite(value):
+        raise ConfigError(f"config value {key} = {quote(value)} must be a finite number")
     if kind is int:
         if float(value) != int(value):
-            raise ConfigError(f"config value {key} = {value!r} must be a whole number")
+            raise ConfigError(f"config value {key} = {quote(value)} must be a whole number")
         value = int(value)
     else:
         value = float(value)
     choices = meta.get("choices")
     if choices is not None and value not in choices:
         allowed = ", ".join(str(c) for c in choices)
-        raise ConfigError(f"config value {key} = {value!r} is not one of {allowed}")
+        raise ConfigError(f"config value {key} = {quote(value)} is not one of {allowed}")
     lo, hi = meta.get("range", (None, None))
     if (lo is not None and value < lo) or (hi is not None and value > hi):
-        raise ConfigError(f"config value {key} = {value!r} is out of range [{lo}, {hi}]")
+        raise ConfigError(f"config value {key} = {quote(value)} is out of range [{lo}, {hi}]")
     return value
 
 
@@ -279,7 +300,7 @@ def config_from_dict(data: dict[str, Any] | None, base: Config | None = None) ->
     for name, value in data.items():
         if name not in _SECTIONS:
             allowed = ", ".join(_SECTIONS)
-            raise ConfigError(f"unknown config key '{name}' (allowed sections: {allowed})")
+            raise ConfigError(f"unknown config key {quote(name)} (allowed sections: {allowed})")
         if value is None:
             continue
         if not isinstance(value, dict):
@@ -290,7 +311,7 @@ def config_from_dict(data: dict[str, Any] | None, base: Config | None = None) ->
         for key, item in value.items():
             if key not in fields:
                 allowed = ", ".join(fields)
-                raise ConfigError(f"unknown config key '{name}.{key}' (allowed: {allowed})")
+                raise ConfigError(f"unknown config key {quote(f'{name}.{key}')} (allowed: {allowed})")
             changes[key] = _check_value(f"{name}.{key}", fields[key], item)
         sections[name] = dataclasses.replace(current, **changes)
     cfg = dataclasses.replace(base, **sections)
@@ -329,8 +350,13 @@ def _bundled_config(name: str) -> Config:
 
 def _parse_config(name_or_path: str) -> Config:
     text, origin = _read_config_text(str(name_or_path))
+    if len(text.encode("utf-8")) > MAX_CONFIG_BYTES:
+        raise ConfigError(f"config {origin} is larger than {MAX_CONFIG_BYTES // 1024} kB; "
+                          "no real config is")
     try:
         data = yaml.safe_load(text)
+    except RecursionError:
+        raise ConfigError(f"config {origin} is nested too deeply") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""

@@ -32,10 +32,24 @@ class Calibration:
     ndisp: int | None = None  # Middlebury's search range 0 .. ndisp - 1, when given
 
     def __post_init__(self):
-        if not (np.isfinite(self.focal) and self.focal > 0):
+        for name in ("focal", "baseline", "cx", "cy", "doffs", "focal_y"):
+            value = getattr(self, name)
+            if value is not None and not np.isfinite(value):
+                raise CalibrationError(f"{name} must be a finite number, got {value}")
+        if not self.focal > 0:
             raise CalibrationError(f"focal length must be positive, got {self.focal}")
-        if not (np.isfinite(self.baseline) and self.baseline > 0):
+        if not self.baseline > 0:
             raise CalibrationError(f"baseline must be positive, got {self.baseline}")
+        if self.ndisp is not None and self.ndisp < 1:
+            raise CalibrationError(f"ndisp must be at least 1, got {self.ndisp}")
+
+    def search_range_for(self, width: int) -> int | None:
+        """``ndisp``, unless it is a placeholder: some benchmarks write the image width (or
+        any number of half the width or more) for "unknown", and no real rig's range
+        reaches that far."""
+        if self.ndisp is None or self.ndisp >= width / 2:
+            return None
+        return self.ndisp
 
     def principal_point(self, shape: tuple[int, ...]) -> tuple[float, float]:
         height, width = shape[:2]
@@ -69,6 +83,8 @@ def read_calibration(path: str | Path) -> Calibration:
             return _kitti(fields)
     except (KeyError, ValueError) as exc:
         raise CalibrationError(f"{path}: malformed calibration ({_describe(exc)})") from None
+    except CalibrationError as exc:
+        raise CalibrationError(f"{path}: {exc}") from None
     raise CalibrationError(f"{path}: not a Middlebury calib.txt (cam0=...) or a KITTI "
                            "calib_cam_to_cam.txt (P_rect_02, P_rect_03)")
 
@@ -77,23 +93,42 @@ def _describe(exc: Exception) -> str:
     return f"missing {exc}" if isinstance(exc, KeyError) else str(exc)
 
 
-def _numbers(text: str) -> np.ndarray:
-    values = [v for v in re.split(r"[\s;,\[\]]+", text) if v]
-    return np.array([float(v) for v in values], dtype=np.float64)
+def _numbers(fields: dict[str, str], key: str) -> np.ndarray:
+    """The finite numbers of ``fields[key]``; ValueError naming the key otherwise."""
+    values = [v for v in re.split(r"[\s;,\[\]]+", fields[key]) if v]
+    try:
+        numbers = np.array([float(v) for v in values], dtype=np.float64)
+    except ValueError:
+        raise ValueError(f"{key} is not a list of numbers") from None
+    if not np.all(np.isfinite(numbers)):
+        raise ValueError(f"{key} holds a number that is not finite")
+    return numbers
+
+
+def _number(fields: dict[str, str], key: str) -> float:
+    numbers = _numbers(fields, key)
+    if numbers.size != 1:
+        raise ValueError(f"{key} must be one number")
+    return float(numbers[0])
 
 
 def _middlebury(fields: dict[str, str]) -> Calibration:
-    cam0 = _numbers(fields["cam0"])
+    cam0 = _numbers(fields, "cam0")
     if cam0.size != 9:
         raise ValueError("cam0 must be a 3x3 matrix")
-    ndisp = int(fields["ndisp"]) if "ndisp" in fields else None
-    return Calibration(focal=cam0[0], baseline=float(fields["baseline"]), cx=cam0[2],
-                       cy=cam0[5], doffs=float(fields.get("doffs", 0.0)), focal_y=cam0[4],
-                       ndisp=ndisp)
+    ndisp = None
+    if "ndisp" in fields:
+        ndisp = _number(fields, "ndisp")
+        if ndisp != int(ndisp):
+            raise ValueError("ndisp must be a whole number")
+        ndisp = int(ndisp)
+    doffs = _number(fields, "doffs") if "doffs" in fields else 0.0
+    return Calibration(focal=cam0[0], baseline=_number(fields, "baseline"), cx=cam0[2],
+                       cy=cam0[5], doffs=doffs, focal_y=cam0[4], ndisp=ndisp)
 
 
 def _kitti(fields: dict[str, str]) -> Calibration:
-    p2, p3 = _numbers(fields["P_rect_02"]), _numbers(fields["P_rect_03"])
+    p2, p3 = _numbers(fields, "P_rect_02"), _numbers(fields, "P_rect_03")
     if p2.size != 12 or p3.size != 12:
         raise ValueError("P_rect_02 and P_rect_03 must be 3x4 matrices")
     focal = p2[0]

@@ -6,6 +6,8 @@ place, so an interrupted run never leaves a partial file behind.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import glob
 import os
 import tempfile
@@ -15,6 +17,7 @@ import cv2
 import numpy as np
 
 from .disparity import INVALID_DISPARITY
+from .image_header import header_size
 
 #: Output formats of a disparity map, by file extension.
 DISPARITY_FORMATS = (".pfm", ".png")
@@ -24,19 +27,57 @@ class ImageError(ValueError):
     """An input image that cannot be used; the message is one line and names the file."""
 
 
-def read_image(path: str | Path) -> np.ndarray:
+#: Largest view read, in megapixels, whatever the memory budget (config
+#: ``memory.max_megapixels``): a full-size Middlebury 2014 view has 6, a 50-megapixel
+#: camera's 50.
+MAX_MEGAPIXELS = 200.0
+#: Memory the whole-image arrays of a run take per pixel of one view, outside the cost
+#: volumes that the stripes bound: both views (6 bytes), their grey levels, gradients
+#: and census codes (36), the disparities, labels and refinement copies (~20). Measured:
+#: the 4x pair (5.7 Mpx) peaks at 1205 MB under a 1024 MB budget.
+IMAGE_BYTES_PER_PIXEL = 64
+
+
+def check_image_size(path: str | Path, width: int, height: int, *,
+                     max_mb: float | None = None,
+                     max_megapixels: float = MAX_MEGAPIXELS) -> None:
+    """Refuse a view too large to read: over ``max_megapixels``, or whose whole-image
+    arrays alone would not fit ``max_mb`` megabytes."""
+    megapixels = width * height / 1e6
+    if megapixels > max_megapixels:
+        raise ImageError(f"{path}: {width}x{height} is {megapixels:.0f} megapixels, over the "
+                         f"limit of {max_megapixels:g} (config memory.max_megapixels)")
+    needed = width * height * IMAGE_BYTES_PER_PIXEL / 2**20
+    if max_mb is not None and needed > max_mb:
+        raise ImageError(f"{path}: {width}x{height} needs about {needed:.0f} MB for its "
+                         f"whole-image arrays, more than the budget of {max_mb:g} MB "
+                         "(--max-memory)")
+
+
+def read_image(path: str | Path, *, max_mb: float | None = None,
+               max_megapixels: float = MAX_MEGAPIXELS) -> np.ndarray:
     """Read a stereo view as (H, W, 3) uint8 BGR.
 
     Grey images are repeated over three channels, 16-bit images are scaled to 8 bits
-    (the top byte), and an alpha channel is dropped.
+    (the top byte), and an alpha channel is dropped. The size is checked from the header
+    before decoding (:func:`check_image_size`).
     """
     path = Path(path)
     if not path.exists():
         raise ImageError(f"{path}: file not found")
     if not path.is_file():
         raise ImageError(f"{path}: not a file")
+    size = header_size(path)
+    if size is not None:
+        check_image_size(path, *size, max_mb=max_mb, max_megapixels=max_megapixels)
     data = np.fromfile(str(path), dtype=np.uint8)
-    image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    try:
+        image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    except cv2.error:  # OpenCV's own limits (CV_IO_MAX_IMAGE_PIXELS), a broken header
+        image = None
+    if image is not None:
+        check_image_size(path, image.shape[1], image.shape[0], max_mb=max_mb,
+                         max_megapixels=max_megapixels)
     if image is None or image.size == 0:
         raise ImageError(f"{path}: not a readable image (unknown format, or truncated)")
     if image.dtype == np.uint16:
@@ -54,20 +95,27 @@ def read_image(path: str | Path) -> np.ndarray:
     return np.ascontiguousarray(image)
 
 
-def read_pair(left_path: str | Path, right_path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+def read_pair(left_path: str | Path, right_path: str | Path, *, max_mb: float | None = None,
+              max_megapixels: float = MAX_MEGAPIXELS) -> tuple[np.ndarray, np.ndarray]:
     """Both views of a stereo pair (see :func:`read_image`), which must be one size."""
-    left, right = read_image(left_path), read_image(right_path)
+    limits = dict(max_mb=max_mb, max_megapixels=max_megapixels)
+    left, right = read_image(left_path, **limits), read_image(right_path, **limits)
     if left.shape != right.shape:
         raise ImageError(f"{left_path} ({left.shape[1]}x{left.shape[0]}) and {right_path} "
                          f"({right.shape[1]}x{right.shape[0]}) differ in size")
     return left, right
 
 
+#: The outputs of the innermost :func:`all_or_none` block: (temporary, final path) pairs.
+_STAGED: contextvars.ContextVar[list | None] = contextvars.ContextVar("staged", default=None)
+
+
 def write_atomic(path: str | Path, encode) -> None:
     """Write bytes made by ``encode(tmp_path)`` to ``path`` through a temporary file.
 
     ``encode`` receives a temporary path with the same extension (OpenCV picks the format
-    from it) and must create that file; the result is renamed onto ``path``.
+    from it) and must create that file; the result is renamed onto ``path`` (inside an
+    :func:`all_or_none` block, when the block ends). A failure names ``path``.
     """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
@@ -77,14 +125,43 @@ def write_atomic(path: str | Path, encode) -> None:
                                dir=folder)
     os.close(fd)
     try:
-        encode(tmp)
+        try:
+            encode(tmp)
+        except OSError as exc:
+            if str(path) in str(exc):
+                raise
+            reason = exc.strerror or str(exc) or type(exc).__name__
+            raise OSError(f"{path}: could not be written ({reason})") from None
         # mkstemp makes the file private (0600); give it the mode any new file gets.
         os.chmod(tmp, 0o666 & ~current_umask())
-        os.replace(tmp, path)
+        staged = _STAGED.get()
+        if staged is None:
+            os.replace(tmp, path)
+        else:
+            staged.append((tmp, path))
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+@contextlib.contextmanager
+def all_or_none():
+    """Writes inside the block land together when it ends without an error; on an error
+    (or Ctrl-C, or SIGTERM) none of them does and their temporaries are removed."""
+    staged: list[tuple[str, Path]] = []
+    token = _STAGED.set(staged)
+    try:
+        yield
+        while staged:
+            tmp, path = staged[0]
+            os.replace(tmp, path)
+            staged.pop(0)
+    finally:
+        _STAGED.reset(token)
+        for tmp, _ in staged:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
 
 
 def _temporary_prefix(path: Path) -> str:
@@ -127,12 +204,13 @@ def check_distinct_paths(inputs, outputs) -> None:
     outputs = [Path(p) for p in outputs if p is not None]
     for k, out in enumerate(outputs):
         for other in inputs + outputs[:k]:
-            if _same_file(out, other):
+            if same_file(out, other):
                 role = "input" if other in inputs else "output"
                 raise ValueError(f"{out}: the output would overwrite the {role} {other}")
 
 
-def _same_file(a: Path, b: Path) -> bool:
+def same_file(a: Path, b: Path) -> bool:
+    """The same file: one path after resolving links and ``..``, or one file on disk."""
     if a.resolve() == b.resolve():
         return True
     try:
@@ -154,11 +232,33 @@ def imwrite_atomic(path: str | Path, image: np.ndarray) -> None:
     write_atomic(path, encode)
 
 
+#: The largest disparity a 16-bit PNG holds (KITTI's value = round(256 d) <= 65535).
+PNG16_MAX_DISPARITY = 65535 / 256.0
+
+
+def png_range_problem(path: str | Path, min_disp: int, max_disp: int) -> str | None:
+    """Why a disparity map of range ``min_disp .. max_disp`` cannot go to ``path``, or
+    None. A 16-bit PNG holds 1/256 .. 255.996 (0 is "invalid"): a negative or larger
+    disparity would be clipped or lost, so such an output is refused before the work."""
+    if Path(path).suffix.lower() != ".png":
+        return None
+    # Sub-pixel refinement may move a winner half a pixel past the searched range.
+    if min_disp < 0 or max_disp + 0.5 > PNG16_MAX_DISPARITY:
+        return (f"{path}: a 16-bit PNG holds disparities 0..{PNG16_MAX_DISPARITY:.3f}, "
+                f"but the search range is {min_disp}..{max_disp}; write .pfm instead")
+    return None
+
+
 def disparity_to_png16(disp: np.ndarray) -> np.ndarray:
-    """KITTI convention: uint16 value = round(256 d), 0 = invalid."""
-    valid = np.isfinite(disp) & (disp >= 0)
+    """KITTI convention: uint16 value = round(256 d), 0 = invalid. Raises ValueError on
+    a disparity the format cannot hold (negative, or above 255.996), never clips."""
+    finite = np.isfinite(disp)
+    values = disp[finite]
+    if values.size and (values.min() < 0 or values.max() > PNG16_MAX_DISPARITY):
+        raise ValueError(f"disparities {values.min():.2f}..{values.max():.2f} do not fit a "
+                         f"16-bit PNG (0..{PNG16_MAX_DISPARITY:.3f}); write .pfm instead")
     out = np.zeros(disp.shape, dtype=np.uint16)
-    out[valid] = np.clip(np.round(disp[valid] * 256.0), 1, 65535).astype(np.uint16)
+    out[finite] = np.maximum(np.round(values * 256.0), 1).astype(np.uint16)
     return out
 
 
@@ -175,7 +275,11 @@ def write_disparity(path: str | Path, disp: np.ndarray) -> None:
     if suffix == ".pfm":
         imwrite_atomic(path, np.ascontiguousarray(disp, dtype=np.float32))
     elif suffix == ".png":
-        imwrite_atomic(path, disparity_to_png16(disp))
+        try:
+            png = disparity_to_png16(disp)
+        except ValueError as exc:
+            raise ValueError(f"{path}: {exc}") from None
+        imwrite_atomic(path, png)
     else:
         raise ValueError(f"{path}: unknown disparity format '{suffix}' "
                          f"(use {' or '.join(DISPARITY_FORMATS)})")
@@ -238,11 +342,13 @@ def read_disparity(path: str | Path) -> np.ndarray:
     return image.astype(np.float32)
 
 
-def colour_disparity(disp: np.ndarray, max_disp: float) -> np.ndarray:
-    """A colour-mapped view (BGR uint8) of a disparity map; invalid pixels black."""
+def colour_disparity(disp: np.ndarray, max_disp: float, min_disp: float = 0) -> np.ndarray:
+    """A colour-mapped view (BGR uint8) of a disparity map over ``min_disp .. max_disp``;
+    invalid pixels black."""
     valid = np.isfinite(disp)
     scaled = np.zeros(disp.shape, dtype=np.uint8)
-    scaled[valid] = np.clip(disp[valid] * (255.0 / max(max_disp, 1e-6)), 0, 255).astype(np.uint8)
+    scale = 255.0 / max(max_disp - min_disp, 1e-6)
+    scaled[valid] = np.clip((disp[valid] - min_disp) * scale, 0, 255).astype(np.uint8)
     out = cv2.applyColorMap(scaled, cv2.COLORMAP_TURBO)
     out[~valid] = 0
     return out

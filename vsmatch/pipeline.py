@@ -164,6 +164,11 @@ def _correct_exposure(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: C
     return photometric.apply(right, correction), cfg, correction
 
 
+#: Channels ``cv2.blur`` filters at once: OpenCV 5 takes at most 128 (4.x took 512); each
+#: channel is blurred on its own, so the chunk size does not change the result.
+BLUR_MAX_CHANNELS = 128
+
+
 def _first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
                  ) -> tuple[np.ndarray, np.ndarray]:
     """A quick match for the photometric statistics: census and gradient costs (the colour
@@ -173,9 +178,10 @@ def _first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
     volume, _, _ = _matching_costs(left, right, max_disp + 1,
                                    dataclasses.replace(cfg.cost, lambda_ad=None))
     box = (cfg.photometric.box, cfg.photometric.box)
-    for first in range(0, volume.shape[2], 256):  # OpenCV filters at most 512 channels
-        part = np.ascontiguousarray(volume[:, :, first:first + 256])
-        volume[:, :, first:first + 256] = cv2.blur(part, box).reshape(part.shape)
+    step = BLUR_MAX_CHANNELS
+    for first in range(0, volume.shape[2], step):
+        part = np.ascontiguousarray(volume[:, :, first:first + step])
+        volume[:, :, first:first + step] = cv2.blur(part, box).reshape(part.shape)
     disp_l, disp_r = disparity.winner_takes_all_both(volume)
     labels = disparity.left_right_check(disp_l, disp_r, n_disp=max_disp + 1, tolerance=0)
     return disp_l, labels == disparity.VALID
