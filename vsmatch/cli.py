@@ -76,7 +76,7 @@ def friendly_errors(func):
             if _debugging():
                 raise
             ctx = click.get_current_context(silent=True)
-            where = ctx.command_path if ctx is not None else "vsmatch"
+            where = " ".join(["vsmatch"] + (ctx.command_path.split()[1:] if ctx else []))
             raise click.ClickException(
                 f"{where}: unexpected {type(exc).__name__}: {_one_line(exc)[:300]} "
                 "(--debug shows the traceback)") from None
@@ -217,7 +217,9 @@ class OneLineErrors(click.Group):
             _stop(KeyboardInterrupt())
         except (Exception, RecursionError, MemoryError) as exc:
             # Outside a command (option parsing, start-up): still one line.
-            if os.environ.get("VSMATCH_DEBUG", "") not in ("", "0") or "--debug" in sys.argv:
+            argv = kwargs.get("args", args[0] if args else None)
+            argv = sys.argv[1:] if argv is None else list(argv)
+            if os.environ.get("VSMATCH_DEBUG", "") not in ("", "0") or "--debug" in argv:
                 raise
             click.echo(f"vsmatch: unexpected {type(exc).__name__}: {_one_line(exc)[:300]} "
                        "(--debug shows the traceback)", err=True)
