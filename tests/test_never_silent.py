@@ -357,3 +357,70 @@ def test_plan_check_compares_by_identity():
     with pytest.raises(batch.BatchError, match="row 2 and row 1 both write"):
         batch.check_plan([a, b])
     batch.check_plan([a])
+
+
+# --- 11, 12, 13. the range, swapped and unrectified views --------------------------------
+
+def smooth_texture(rng, height, width):
+    """A smooth random texture (SIFT finds corners in it)."""
+    base = rng.integers(0, 256, size=(height // 4 + 1, width // 4 + 1, 3), dtype=np.uint8)
+    return cv2.resize(base, (width // 4 * 4 + 4, height // 4 * 4 + 4),
+                      interpolation=cv2.INTER_CUBIC)[:height, :width]
+
+
+def shifted_pair(rng, dx, dy=0, height=120, width=240):
+    """Left pixel (x, y) shows what right pixel (x - dx, y - dy) shows."""
+    wide = smooth_texture(rng, height + 2 * abs(dy), width + 2 * abs(dx))
+    x0, y0 = abs(dx), abs(dy)
+    left = wide[y0:y0 + height, x0:x0 + width]
+    right = wide[y0 + dy:y0 + dy + height, x0 + dx:x0 + dx + width]
+    return np.ascontiguousarray(left), np.ascontiguousarray(right)
+
+
+def verged_pair(rng):
+    """Disparities -12 in the top half, +10 in the bottom half (a verged rig's mix)."""
+    top, bottom = shifted_pair(rng, -12, height=80), shifted_pair(rng, 10, height=80)
+    return np.vstack([top[0], bottom[0]]), np.vstack([top[1], bottom[1]])
+
+
+def test_the_found_range_goes_below_zero_with_the_pair(rng):
+    from vsmatch.search_range import estimate_disparity_range
+
+    found = estimate_disparity_range(*verged_pair(rng))
+    assert found.min_disp <= -12 and found.max_disp >= 10
+    left, right = shifted_pair(rng, 12)
+    assert estimate_disparity_range(left, right).min_disp == 0
+
+
+def test_a_negative_found_range_is_searched(tmp_path, rng):
+    left, right = verged_pair(rng)
+    cv2.imwrite(str(tmp_path / "l.png"), left)
+    cv2.imwrite(str(tmp_path / "r.png"), right)
+    result = invoke("run", tmp_path / "l.png", tmp_path / "r.png", "-o", tmp_path / "d.pfm",
+                    "-v")
+    assert result.exit_code == 0, result.output
+    disp = io.read_disparity(tmp_path / "d.pfm")
+    assert np.mean(np.abs(disp[10:70, 30:-30] + 12) < 1) > 0.9
+    assert np.mean(np.abs(disp[90:-10, 30:-30] - 10) < 1) > 0.9
+
+
+def test_swapped_views_are_refused_without_a_range_and_named_with_one(tmp_path, rng):
+    left, right = shifted_pair(rng, 12)
+    cv2.imwrite(str(tmp_path / "l.png"), left)
+    cv2.imwrite(str(tmp_path / "r.png"), right)
+    swapped = ["run", tmp_path / "r.png", tmp_path / "l.png", "-o", tmp_path / "d.pfm"]
+    assert "views look swapped" in one_line_error(invoke(*swapped))
+    assert not (tmp_path / "d.pfm").exists()
+    given = invoke(*swapped, "--max-disp", 20)
+    assert given.exit_code == 0 and "warning: " in given.output and "swapped" in given.output
+
+
+def test_unrectified_views_are_refused_without_a_range_and_named_with_one(tmp_path, rng):
+    left, right = shifted_pair(rng, 8, dy=4)
+    cv2.imwrite(str(tmp_path / "l.png"), left)
+    cv2.imwrite(str(tmp_path / "r.png"), right)
+    args = ["run", tmp_path / "l.png", tmp_path / "r.png", "-o", tmp_path / "d.pfm"]
+    line = one_line_error(invoke(*args))
+    assert "rows disagree by 4.0 px" in line and "not rectified" in line
+    given = invoke(*args, "--max-disp", 20)
+    assert given.exit_code == 0 and "warning: " in given.output and "rectif" in given.output

@@ -19,7 +19,8 @@ from pathlib import Path
 
 import click
 
-from . import __version__, batch, datasets, evaluation, geometry, io, pipeline, synthetic
+from . import (__version__, batch, datasets, evaluation, geometry, io, pipeline, search_range,
+               synthetic)
 from .config import ConfigError, bundled_config_names, config_from_dict, load_config
 from .executors import ExecutorError, make_executor
 from .peers import PEER_METHODS
@@ -282,9 +283,10 @@ def _writable(folder: Path) -> bool:
 @click.option("--max-disp", type=MAX_DISP, default=None,
               help="Largest disparity searched, or 'auto' to estimate it from the pair. "
                    "Default: the calibration's ndisp - 1, else auto.")
-@click.option("--min-disp", type=int, default=0, show_default=True,
+@click.option("--min-disp", type=int, default=None,
               help="Smallest disparity searched (may be negative); left pixels with no "
-                   "candidate in the range are invalid, as with OpenCV's minDisparity.")
+                   "candidate in the range are invalid, as with OpenCV's minDisparity. "
+                   "Default: 0, or below 0 when the range found from the pair is.")
 @click.option("--calib", type=click.Path(dir_okay=False), default=None,
               help="Calibration: a Middlebury 2014 calib.txt or a KITTI "
                    "calib_cam_to_cam.txt (for --depth and --cloud, and the range).")
@@ -339,25 +341,32 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx
     cfg = _with_budget(load_config(config), max_memory)
     # Refused before anything is decoded: a range a PNG cannot hold, an image too large.
     if max_disp is not None:
-        _check_png_range(out, min_disp, max_disp)
+        _check_png_range(out, min_disp or 0, max_disp)
     left_image, right_image = io.read_pair(left, right, max_mb=cfg.memory.max_mb,
                                            max_megapixels=cfg.memory.max_megapixels)
     width = left_image.shape[1]
     if max_disp is None and camera is not None:
         ndisp = camera.search_range_for(width)
         if ndisp is not None:
-            max_disp = min_disp + ndisp - 1
+            max_disp = (min_disp or 0) + ndisp - 1
         elif camera.ndisp is not None:
             _verbose(ctx, f"{calib}: ndisp={camera.ndisp} is half the image width or more, "
                           "taken as 'unknown': finding the range from the pair")
-    if max_disp is None:
-        found = _estimate_range(left_image, right_image, left)
-        _verbose(ctx, f"{left}: {found.describe()}")
-        min_disp = min(min_disp, found.min_disp)
-        max_disp = max(found.max_disp, min_disp + 1)
-    elif max_disp >= width:
+    if max_disp is not None and max_disp >= width:
         raise click.BadParameter(f"{max_disp} must be less than the image width ({width})",
                                  param_hint="'--max-disp'")
+    matches = search_range.feature_matches(left_image, right_image)
+    if max_disp is None:
+        found = _estimate_range(left_image, right_image, left, matches)
+        _verbose(ctx, f"{left}: {found.describe()}")
+        min_disp = found.min_disp if min_disp is None else min_disp
+        max_disp = max(found.max_disp, min_disp + 1)
+    else:
+        # Given a range, a pair the method cannot see is wrong is still named.
+        problem = search_range.pair_problem(matches)
+        if problem is not None:
+            _echo(ctx, f"warning: {left}: {problem}", err=True)
+    min_disp = min_disp or 0
     _check_png_range(out, min_disp, max_disp)
     try:
         pipeline.check_pair(left_image, right_image, max_disp, cfg, min_disp)
@@ -426,11 +435,9 @@ def _calibration(calib, focal, baseline, cx, cy, doffs) -> geometry.Calibration 
                                 doffs=doffs or 0.0)
 
 
-def _estimate_range(left_image, right_image, name):
-    from .search_range import estimate_disparity_range
-
+def _estimate_range(left_image, right_image, name, matches=None):
     try:
-        return estimate_disparity_range(left_image, right_image)
+        return search_range.estimate_disparity_range(left_image, right_image, matches)
     except ValueError as exc:
         raise click.ClickException(f"{name}: {exc}") from None
 
