@@ -141,11 +141,13 @@ def test_missing_dask_says_how_to_install(tmp_path, monkeypatch):
     assert len(result.output.strip().splitlines()) == 1
 
 
-@pytest.mark.parametrize("value", ["local:0", "local:x"])
-def test_bad_local_cluster_size(tmp_path, value):
+@pytest.mark.parametrize("value", ["local:0", "local:x", "garbage", "tcp://host"])
+def test_bad_scheduler_addresses_are_usage_errors_naming_the_option(tmp_path, value):
     src = write_recording(tmp_path / "drive", 1, size=(40, 60))
     result = invoke("batch", src, "-o", tmp_path / "out", "--max-disp", 8, "--scheduler", value)
-    assert result.exit_code == 1 and "expected local:N" in result.output
+    assert result.exit_code == 2 and "expected" in result.output
+    assert "--scheduler" in result.output and len(result.output.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
 
 
 def fails_on_three(item):

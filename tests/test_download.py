@@ -142,3 +142,41 @@ def test_datasets_list_says_where_it_looks(tmp_path):
 
 def test_archive_names():
     assert download.archive_names("H") == ["MiddEval3-data-H.zip", "MiddEval3-GT0-H.zip"]
+
+
+def test_a_member_that_inflates_past_the_known_size_is_refused(server, tmp_path,
+                                                                monkeypatch):
+    make_archives(server.root)
+    bomb = bytes_io.BytesIO()
+    with zipfile.ZipFile(bomb, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr("MiddEval3/trainingQ/Alpha/im0.png", b"\0" * (3 << 20))
+    (server.root / "MiddEval3-data-Q.zip").write_bytes(bomb.getvalue())
+    monkeypatch.setattr(download, "MAX_UNPACKED_MB", {"Q": 2})
+    to = tmp_path / "data"
+    result = fetch(server, to)
+    assert result.exit_code == 1 and "more than the dataset's known size" in result.output
+    assert not (to / "middlebury2014-quarter").exists()
+    assert not [p for p in to.iterdir() if p.name.startswith(".middlebury")]
+
+
+def test_stale_staging_is_removed_and_the_dataset_follows_the_umask(server, tmp_path):
+    import os
+
+    make_archives(server.root)
+    to = tmp_path / "data"
+    stale = to / ".middlebury2014-quarter.x8k2_a"  # what a killed unpack leaves
+    (stale / "Alpha").mkdir(parents=True)
+    old = os.umask(0o022)
+    try:
+        result = fetch(server, to)
+    finally:
+        os.umask(old)
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in to.iterdir()) == ["middlebury2014-quarter"]
+    assert (to / "middlebury2014-quarter").stat().st_mode & 0o777 == 0o755
+
+
+def test_datasets_list_names_one_data_root(tmp_path):
+    result = CliRunner().invoke(main, ["datasets", "list", "--data-root", str(tmp_path)])
+    roots = [line for line in result.output.splitlines() if line.startswith("data root")]
+    assert roots == [f"data root: {tmp_path.resolve()} (--data-root or VSMATCH_DATA change it)"]

@@ -424,3 +424,34 @@ def test_unrectified_views_are_refused_without_a_range_and_named_with_one(tmp_pa
     assert "rows disagree by 4.0 px" in line and "not rectified" in line
     given = invoke(*args, "--max-disp", 20)
     assert given.exit_code == 0 and "warning: " in given.output and "rectif" in given.output
+
+
+def test_sigterm_ends_a_parallel_batch_and_its_workers(tmp_path, rng):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    psutil = pytest.importorskip("psutil")
+    for k in range(6):
+        left, right = shifted_pair(rng, 20, height=400, width=600)
+        cv2.imwrite(str(tmp_path / f"p{k}_left.png"), left)
+        cv2.imwrite(str(tmp_path / f"p{k}_right.png"), right)
+    proc = subprocess.Popen([sys.executable, "-m", "vsmatch", "batch", str(tmp_path), "-o",
+                             str(tmp_path / "out"), "--jobs", "2", "--max-disp", "200",
+                             "--config", "default"], stderr=subprocess.PIPE, text=True)
+    parent = psutil.Process(proc.pid)
+    deadline = time.time() + 120
+    while time.time() < deadline and len(parent.children(recursive=True)) < 3:
+        time.sleep(0.2)  # the resource tracker and two workers
+    children = parent.children(recursive=True)
+    assert len(children) >= 3
+    time.sleep(2)  # the workers busy matching
+    os.kill(proc.pid, signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    gone, alive = psutil.wait_procs(children, timeout=15)
+    assert not alive, [p.cmdline() for p in alive]
+    leftovers = [p.name for p in (tmp_path / "out").iterdir() if ".tmp" in p.name]
+    assert leftovers == []

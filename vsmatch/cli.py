@@ -156,9 +156,21 @@ def config_option(func):
 
 def max_memory_option(func):
     return click.option(
-        "--max-memory", type=click.IntRange(min=16), default=None, metavar="MB",
+        "--max-memory", type=click.IntRange(min=16, max=1 << 20), default=None, metavar="MB",
         help="Working-memory budget of the matching in MB (the config's memory.max_mb, "
              "default 1024); larger images are matched in horizontal stripes.")(func)
+
+
+def _scheduler_address(value: str | None) -> str | None:
+    from .executors.cluster import check_scheduler
+
+    if value is not None:
+        try:
+            check_scheduler(value)
+        except ExecutorError as exc:
+            raise click.BadParameter(str(exc).split(": ", 1)[1],
+                                     param_hint="'--scheduler'") from None
+    return value
 
 
 def _with_budget(cfg, max_memory: int | None):
@@ -637,6 +649,7 @@ def bench_command(ctx, data_root, config, repeats, no_cold, no_size, json_path):
 @click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
               help="Pairs matched at once, each in its own process.")
 @click.option("--scheduler", default=None, metavar="tcp://HOST:PORT|local:N",
+              callback=lambda ctx, param, value: _scheduler_address(value),
               help="Run the pairs on a Dask cluster: a running scheduler's address, or "
                    "local:N to start N worker processes here (pip install "
                    "'vsmatch[cluster]'). Inputs and outputs must be at the same paths on "
@@ -727,8 +740,8 @@ def datasets_group():
 def datasets_list(ctx, data_root):
     """Show each known dataset, where it is looked for and whether it is there."""
     roots = datasets.resolve_data_root(data_root)
-    _echo(ctx, "data root: " + ", ".join(str(r.resolve()) for r in roots)
-          + " (each dataset is read from the first of these that has it; --data-root or VSMATCH_DATA change them)")
+    existing = [r for r in roots if r.is_dir()] or roots
+    _echo(ctx, f"data root: {existing[0].resolve()} (--data-root or VSMATCH_DATA change it)")
     for name, spec in datasets.DATASETS.items():
         try:
             folder = datasets.dataset_folder(name, data_root)

@@ -11,11 +11,13 @@ appears whole or not at all (it is built beside its place and renamed into it).
 
 from __future__ import annotations
 
+import glob
 import shutil
 import tempfile
 import zipfile
 from pathlib import Path
 
+from ..io import current_umask
 from .base import DatasetError
 from .middlebury2014 import SCENE_FILES, missing_files
 
@@ -27,6 +29,13 @@ CACHE = ".downloads"
 #: What is unpacked of a training scene: what the reader needs, and the right view's
 #: ground truth where an archive has it.
 KEPT_FILES = (*SCENE_FILES, "disp1GT.pfm", "mask1nocc.png")
+
+
+#: The most the training scenes of a resolution may unpack to (MB): about 4x what the
+#: real ones give (quarter size: 26 MB of training scenes), so an archive member that
+#: inflates past it (a zip bomb, a wrong archive) is refused while it is written.
+MAX_UNPACKED_MB = {"Q": 200, "H": 800, "F": 3200}
+CHUNK = 1 << 20
 
 
 class DownloadError(DatasetError):
@@ -63,6 +72,7 @@ def download_middlebury2014(resolution: str, to: str | Path, *, mirror: str | No
                             "and run again")
     to = Path(to)
     to.mkdir(parents=True, exist_ok=True)
+    remove_stale_staging(target)
     cache = to / CACHE
     archives = [_fetch(name, mirror or BASE_URL, cache, progress, retries)
                 for name in archive_names(resolution)]
@@ -92,16 +102,30 @@ def _fetch(name: str, base_url: str, cache: Path, progress: bool, retries: int) 
                             "give --mirror") from None
 
 
+def _staging_prefix(target: Path) -> str:
+    return f".{target.name}."
+
+
+def remove_stale_staging(target: Path) -> None:
+    """Remove the hidden staging folders that a killed unpack of ``target`` left (an
+    unpack that fails removes its own). Only for when no download is under way."""
+    if target.parent.is_dir():
+        for folder in target.parent.glob(glob.escape(_staging_prefix(target)) + "*"):
+            if folder.is_dir():
+                shutil.rmtree(folder, ignore_errors=True)
+
+
 def _unpack_training(archives: list[Path], resolution: str, target: Path) -> None:
     """Merge ``MiddEval3/training<R>/<scene>/`` of every archive into ``target``."""
     prefix = f"MiddEval3/training{resolution}/"
-    staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+    staging = Path(tempfile.mkdtemp(prefix=_staging_prefix(target), dir=target.parent))
+    budget = [MAX_UNPACKED_MB[resolution] * 2**20]  # bytes still allowed, shared
     try:
         for archive in archives:
             try:
                 with zipfile.ZipFile(archive) as zf:
                     for member in zf.infolist():
-                        _extract(zf, member, prefix, staging)
+                        _extract(zf, member, prefix, staging, budget)
             except (zipfile.BadZipFile, EOFError, OSError) as exc:
                 archive.unlink(missing_ok=True)  # fetch it again next time
                 raise DownloadError(f"{archive.name}: not a readable zip archive ({exc}); "
@@ -114,13 +138,17 @@ def _unpack_training(archives: list[Path], resolution: str, target: Path) -> Non
             if lacking:
                 raise DownloadError(f"scene {scene.name} lacks {', '.join(lacking)} after "
                                     f"unpacking {', '.join(a.name for a in archives)}")
+        # mkdtemp makes the folder private (0700); give it the mode any new folder gets.
+        staging.chmod(0o777 & ~current_umask())
         staging.rename(target)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
 
 
-def _extract(zf: zipfile.ZipFile, member: zipfile.ZipInfo, prefix: str, into: Path) -> None:
-    """One archive member under ``prefix``, if it is a training scene's file."""
+def _extract(zf: zipfile.ZipFile, member: zipfile.ZipInfo, prefix: str, into: Path,
+             budget: list[int]) -> None:
+    """One archive member under ``prefix``, if it is a training scene's file, counted
+    against ``budget`` (bytes) as it is written, whatever its header claims."""
     name = member.filename
     if member.is_dir() or not name.startswith(prefix):
         return
@@ -130,4 +158,9 @@ def _extract(zf: zipfile.ZipFile, member: zipfile.ZipInfo, prefix: str, into: Pa
     folder = into / parts[0]
     folder.mkdir(exist_ok=True)
     with zf.open(member) as src, open(folder / parts[1], "wb") as dst:
-        shutil.copyfileobj(src, dst)
+        while chunk := src.read(CHUNK):
+            budget[0] -= len(chunk)
+            if budget[0] < 0:
+                raise DownloadError(f"{member.filename}: the archive unpacks to more than "
+                                    f"the dataset's known size; refused")
+            dst.write(chunk)

@@ -17,11 +17,18 @@ class Executor:
     def __enter__(self) -> Executor:
         return self
 
-    def __exit__(self, *exc_info) -> None:
-        self.close()
+    def __exit__(self, exc_type, exc, traceback) -> None:
+        if exc_type is not None and issubclass(exc_type, KeyboardInterrupt):
+            self.abort()  # Ctrl-C or SIGTERM: the workers end with the batch, now
+        else:
+            self.close()
 
     def close(self) -> None:
         """Release workers, connections, clusters this executor started."""
+
+    def abort(self) -> None:
+        """Stop at once: end running tasks where that is possible, then release all."""
+        self.close()
 
     def map_unordered(self, fn: Callable[[Any], Any],
                       items: Iterable[Any]) -> Iterator[tuple[Any, Any]]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import logging
 import os
+import re
 
 from .base import Executor, ExecutorError, describe_error, share_of_cores, use_threads
 
@@ -67,8 +68,19 @@ def _with_threads(fn, threads: int, item):
     return fn(item)
 
 
+#: A scheduler's address: PROTOCOL://HOST:PORT or HOST:PORT.
+ADDRESS = re.compile(r"^([a-z]+://)?(\[[0-9a-fA-F:.]+\]|[^\s:/\[\]]+):\d{1,5}$")
+
+
+def check_scheduler(scheduler: str) -> None:
+    """Refuse an address that is neither ``local:N`` nor ``[PROTOCOL://]HOST:PORT``."""
+    if parse_local(scheduler) is None and not ADDRESS.match(scheduler):
+        raise ExecutorError(f"--scheduler {scheduler}: expected tcp://HOST:PORT or local:N")
+
+
 class ClusterExecutor(Executor):
     def __init__(self, scheduler: str):
+        check_scheduler(scheduler)
         workers = parse_local(scheduler)
         distributed = _import_distributed()
         self._cluster = None

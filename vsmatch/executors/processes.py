@@ -20,6 +20,14 @@ class ProcessExecutor(Executor):
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
 
+    def abort(self) -> None:
+        # shutdown() would wait for the running pairs; a killed task leaves only a
+        # temporary file, which run_batch removes.
+        processes = list((getattr(self._pool, "_processes", None) or {}).values())
+        for process in processes:
+            process.terminate()
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
     def map_unordered(self, fn, items):
         futures = {self._pool.submit(fn, item): item for item in items}
         try:
