@@ -178,8 +178,9 @@ def test_a_very_thin_pair_without_a_range_is_one_line(tmp_path, rng):
     left, right = random_pair(rng, height=4, width=2000, shift=3)
     cv2.imwrite(str(tmp_path / "l.png"), left)
     cv2.imwrite(str(tmp_path / "r.png"), right)
-    one_line_error(invoke("run", tmp_path / "l.png", tmp_path / "r.png", "-o",
-                          tmp_path / "d.pfm"))
+    line = one_line_error(invoke("run", tmp_path / "l.png", tmp_path / "r.png", "-o",
+                                 tmp_path / "d.pfm"))
+    assert "could not estimate the disparity range" in line and "--max-disp" in line
 
 
 @pytest.mark.parametrize("text,message", [
@@ -455,3 +456,42 @@ def test_sigterm_ends_a_parallel_batch_and_its_workers(tmp_path, rng):
     assert not alive, [p.cmdline() for p in alive]
     leftovers = [p.name for p in (tmp_path / "out").iterdir() if ".tmp" in p.name]
     assert leftovers == []
+
+
+def test_match_finds_the_range_when_max_disp_is_none(rng):
+    left, right = verged_pair(rng)
+    result = pipeline.run(left, right, max_disp=None, config="paper")
+    low, high = result.search_range
+    assert low <= -12 and high >= 10
+    disp = pipeline.match(left, right, max_disp=None, config="paper")
+    np.testing.assert_array_equal(disp, result.disparity)
+    np.testing.assert_array_equal(
+        disp, pipeline.match(left, right, min_disp=low, max_disp=high, config="paper"))
+    left, right = shifted_pair(rng, 12)
+    with pytest.raises(ValueError, match="swapped"):
+        pipeline.match(right, left, max_disp=None)
+
+
+# --- 18. the first run's compilation -----------------------------------------------------
+
+def test_a_cold_kernel_cache_is_announced(pair_files, tmp_path, monkeypatch):
+    from vsmatch import _kernels
+
+    monkeypatch.setattr(_kernels, "cache_is_cold", lambda: True)
+    result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm", "--max-disp", 8)
+    assert result.exit_code == 0 and "compiling the kernels once" in result.output
+    monkeypatch.undo()
+    assert "compiling" not in invoke("run", *pair_files, "-o", tmp_path / "e.pfm",
+                                     "--max-disp", 8).output
+
+
+def test_cache_is_cold_looks_in_numba_cache_dir(tmp_path, monkeypatch):
+    from vsmatch._kernels import cache_is_cold
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert cache_is_cold()
+    import sys
+    tag = f"py{sys.version_info.major}{sys.version_info.minor}"
+    (tmp_path / "x").mkdir()
+    (tmp_path / "x" / f"aggregate.sum_over_arms-24.{tag}.nbi").write_bytes(b"")
+    assert not cache_is_cold()

@@ -31,6 +31,7 @@ class MatchResult:
     levels: int = 0  # pyramid levels below the input where the full search ran
     stripes: int = 1  # stripes the full search ran in
     photometric: photometric.Correction | None = None  # the right view's colour map, if any
+    search_range: tuple[int, int] | None = None  # (min_disp, max_disp) searched
 
 
 def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
@@ -73,18 +74,22 @@ def full_search_size(width: int, max_disp: int, cfg: Config) -> tuple[int, int]:
     return width, max_disp + 1
 
 
-def match(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0,
-          config: Config | str | None = None) -> np.ndarray:
+def match(left: np.ndarray, right: np.ndarray, *, max_disp: int | None = None,
+          min_disp: int | None = None, config: Config | str | None = None) -> np.ndarray:
     """Left-view disparity of a rectified stereo pair.
 
     Parameters
     ----------
     left, right : ndarray, (H, W, 3) uint8 in BGR order (as ``cv2.imread`` gives), or (H, W)
         uint8 grey. Both the same size.
-    max_disp : int
+    max_disp : int or None
         The largest disparity searched; disparities ``min_disp .. max_disp`` are considered.
+        ``None`` finds the range from the pair, as ``vsmatch run`` without ``--max-disp``
+        (:func:`vsmatch.estimate_disparity_range`; raises ValueError for a pair whose
+        range cannot be found, or whose views are swapped or not rectified).
     min_disp : int, optional
-        The smallest disparity searched (default 0; may be negative). As with OpenCV's
+        The smallest disparity searched (default 0, or the found range's bottom, which
+        may be negative, when ``max_disp`` is None; may be negative). As with OpenCV's
         ``minDisparity``, left pixels with no candidate in the range are invalid: the
         first ``min_disp`` columns when it is positive, the last ``-min_disp`` when negative.
     config : Config, bundled config name or YAML path, optional
@@ -99,13 +104,23 @@ def match(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int =
     return run(left, right, max_disp=max_disp, min_disp=min_disp, config=config).disparity
 
 
-def run(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0,
-        config: Config | str | None = None) -> MatchResult:
-    """:func:`match` with per-stage timings and the left-right labels."""
+def run(left: np.ndarray, right: np.ndarray, *, max_disp: int | None = None,
+        min_disp: int | None = None, config: Config | str | None = None) -> MatchResult:
+    """:func:`match` with per-stage timings, the left-right labels and the range used."""
     cfg = load_config(config)
+    if max_disp is None:
+        from .search_range import estimate_disparity_range
+
+        check_pair(left, right, 1, cfg)  # the views' own checks, before the features
+        found = estimate_disparity_range(left, right)
+        min_disp = found.min_disp if min_disp is None else min_disp
+        max_disp = max(found.max_disp, min_disp + 1)
+    min_disp = 0 if min_disp is None else min_disp
     check_pair(left, right, max_disp, cfg, min_disp)
     if min_disp == 0:
-        return _run_from_zero(left, right, max_disp, cfg)
+        result = _run_from_zero(left, right, max_disp, cfg)
+        result.search_range = (0, max_disp)
+        return result
     # Disparities m .. max of the whole views are 0 .. max - m of views cropped by |m|
     # columns: with m > 0 the left view loses its first m columns (they have no right
     # pixel at any d >= m) and the right view its last m; with m < 0 the other way round.
@@ -122,6 +137,7 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0
         labels = np.full(left.shape[:2], disparity.OCCLUDED, dtype=np.uint8)
         labels[:, keep] = result.labels
         result.labels = labels
+    result.search_range = (min_disp, max_disp)
     return result
 
 

@@ -31,6 +31,7 @@ import numpy as np
 
 #: Features are found on the pair reduced to at most this many columns.
 FEATURE_WIDTH = 1280
+FEATURE_MIN_ROWS = 8
 #: Lowe's ratio test, and the strongest features kept per view.
 RATIO = 0.75
 MAX_FEATURES = 4000
@@ -42,6 +43,7 @@ SPARSE_PERCENTILE = 99.5
 #: The dense check runs at about this many columns.
 DENSE_WIDTH = 200
 DENSE_PERCENTILE = 99.5
+DENSE_MIN_ROWS = 16
 DENSE_MIN_VALID = 0.1  # share of pixels passing the left-right check, else ignored
 DENSE_MAX_GAIN = 1.5
 MARGIN_FACTOR = 1.3
@@ -171,11 +173,13 @@ def _reduced(image: np.ndarray, factor: int) -> np.ndarray:
 def feature_matches(left: np.ndarray, right: np.ndarray) -> FeatureMatches:
     """SIFT matches between the views that pass Lowe's ratio test (any row)."""
     factor = max(1, math.ceil(left.shape[1] / FEATURE_WIDTH))
+    points = []
+    if left.shape[0] // factor < FEATURE_MIN_ROWS:  # too thin to find features in
+        return FeatureMatches(*np.empty((4, 0)), height=left.shape[0], factor=factor)
     grey_l, grey_r = (_reduced(_grey(v), factor) for v in (left, right))
     sift = cv2.SIFT_create(nfeatures=MAX_FEATURES, contrastThreshold=0.02)
     keys_l, desc_l = sift.detectAndCompute(grey_l, None)
     keys_r, desc_r = sift.detectAndCompute(grey_r, None)
-    points = []
     if desc_l is not None and desc_r is not None and len(keys_r) >= 2:
         for pair in cv2.BFMatcher(cv2.NORM_L2).knnMatch(desc_l, desc_r, k=2):
             if len(pair) == 2 and pair[0].distance < RATIO * pair[1].distance:
@@ -210,6 +214,8 @@ def dense_estimate(left: np.ndarray, right: np.ndarray) -> float | None:
     from .pipeline import run
 
     factor = max(1, round(left.shape[1] / DENSE_WIDTH))
+    if left.shape[0] // factor < DENSE_MIN_ROWS:
+        return None  # a very wide, thin pair has no rows left at this size
     small_l, small_r = _reduced(left, factor), _reduced(right, factor)
     try:
         result = run(small_l, small_r, max_disp=small_l.shape[1] // 2)
