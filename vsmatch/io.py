@@ -10,6 +10,7 @@ import contextlib
 import contextvars
 import glob
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -72,7 +73,8 @@ def read_image(path: str | Path, *, max_mb: float | None = None,
         check_image_size(path, *size, max_mb=max_mb, max_megapixels=max_megapixels)
     data = np.fromfile(str(path), dtype=np.uint8)
     try:
-        image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+        with _native_stderr_silenced():
+            image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
     except cv2.error:  # OpenCV's own limits (CV_IO_MAX_IMAGE_PIXELS), a broken header
         image = None
     if image is not None:
@@ -93,6 +95,27 @@ def read_image(path: str | Path, *, max_mb: float | None = None,
     elif image.shape[2] != 3:
         raise ImageError(f"{path}: unsupported number of channels {image.shape[2]}")
     return np.ascontiguousarray(image)
+
+
+@contextlib.contextmanager
+def _native_stderr_silenced():
+    """Keep the C libraries' own complaints (OpenCV 4's libpng: "libpng error: ...") off
+    stderr while decoding: our one-line error says what went wrong. OpenCV 5 routes them
+    through its logging, which the CLI silences."""
+    try:
+        fd = sys.stderr.fileno()
+    except (AttributeError, OSError, ValueError):  # no real stderr (captured, embedded)
+        yield
+        return
+    sys.stderr.flush()
+    saved, devnull = os.dup(fd), os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    try:
+        yield
+    finally:
+        os.dup2(saved, fd)
+        os.close(saved)
+        os.close(devnull)
 
 
 def read_pair(left_path: str | Path, right_path: str | Path, *, max_mb: float | None = None,

@@ -53,9 +53,10 @@ MIN_MATCHES = 10
 
 
 #: The views are taken as swapped when at least this share of the consistent matches
-#: has a negative disparity. Measured: 0 % on all 24 scenes the developers have, >= 99 %
-#: with their views swapped.
-SWAPPED_SHARE = 0.9
+#: has a negative disparity. Measured (scripts/range_kinds.py): 0 % on all 24 scenes the
+#: developers have, 99.0-100 % with their views swapped; but 97.9 % on Aloe cropped so
+#: that half its range is negative (its features sit on the far wall): a thin margin.
+SWAPPED_SHARE = 0.985
 #: The views' rows are taken to disagree (the pair is not rectified) when the feature
 #: matches' median vertical offset exceeds this (pixels). Measured: <= 0.47 on the 24
 #: rectified scenes.
@@ -127,10 +128,14 @@ def estimate_disparity_range(left: np.ndarray, right: np.ndarray,
         # The dense check alone is not trusted: on a blank pair every disparity passes.
         raise RangeError(f"could not estimate the disparity range (only "
                          f"{disparities.size} consistent feature matches); give --max-disp")
-    dense = dense_estimate(left, right)
+    low = float(np.percentile(disparities, LOW_PERCENTILE))
+    dense, dense_low = dense_estimate(left, right, low)
     top = sparse if dense is None else max(sparse, min(dense, DENSE_MAX_GAIN * sparse))
     max_disp = math.ceil(MARGIN_FACTOR * max(top, 0.0) + MARGIN_PIXELS)
-    low = float(np.percentile(disparities, LOW_PERCENTILE))
+    if low < 0 and dense_low is not None:
+        # The dense check sees far surfaces without corners; its own search (from twice
+        # the sparse bottom) bounds how far it may widen the range.
+        low = min(low, dense_low)
     min_disp = 0 if low >= 0 else math.floor(MARGIN_FACTOR * low - MARGIN_PIXELS)
     # The views are cropped by |min_disp| columns for an offset range (pipeline.run).
     max_disp = int(min(max_disp, width - 2 - abs(min_disp) + min_disp))
@@ -208,20 +213,27 @@ def _agreeing(x: np.ndarray, y: np.ndarray, disp: np.ndarray, factor: int) -> np
     return disp[agree]
 
 
-def dense_estimate(left: np.ndarray, right: np.ndarray) -> float | None:
-    """The high percentile of a wide, coarse vsmatch run's checked disparities, or None."""
+def dense_estimate(left: np.ndarray, right: np.ndarray, low: float = 0.0
+                   ) -> tuple[float | None, float | None]:
+    """The high and low percentiles of a wide, coarse vsmatch run's checked disparities
+    (None when the run is not usable). It searches ``0 .. half the width``, from twice
+    ``low`` when the sparse matches reach below 0."""
     from .disparity import VALID
     from .pipeline import run
 
     factor = max(1, round(left.shape[1] / DENSE_WIDTH))
     if left.shape[0] // factor < DENSE_MIN_ROWS:
-        return None  # a very wide, thin pair has no rows left at this size
+        return None, None  # a very wide, thin pair has no rows left at this size
     small_l, small_r = _reduced(left, factor), _reduced(right, factor)
+    bottom = min(0, math.floor(2 * low / factor) - MARGIN_PIXELS) if low < 0 else 0
     try:
-        result = run(small_l, small_r, max_disp=small_l.shape[1] // 2)
+        result = run(small_l, small_r, min_disp=bottom,
+                     max_disp=small_l.shape[1] // 2 + min(bottom, 0))
     except ValueError:  # too small to match at this size
-        return None
+        return None, None
     valid = result.labels == VALID
     if valid.mean() < DENSE_MIN_VALID:
-        return None
-    return float(np.percentile(result.disparity[valid], DENSE_PERCENTILE)) * factor
+        return None, None
+    values = result.disparity[valid]
+    return (float(np.percentile(values, DENSE_PERCENTILE)) * factor,
+            float(np.percentile(values, LOW_PERCENTILE)) * factor)
