@@ -495,3 +495,17 @@ def test_cache_is_cold_looks_in_numba_cache_dir(tmp_path, monkeypatch):
     (tmp_path / "x").mkdir()
     (tmp_path / "x" / f"aggregate.sum_over_arms-24.{tag}.nbi").write_bytes(b"")
     assert not cache_is_cold()
+
+
+def test_an_impossible_memory_budget_is_a_usage_error_naming_the_option(pair_files, tmp_path):
+    line = one_line_error(invoke("run", *pair_files, "-o", tmp_path / "d.pfm", "--max-disp",
+                                 8, "--max-memory", 99999999999), code=2)
+    assert "--max-memory" in line and "memory.max_mb" not in line
+
+
+def test_a_placeholder_ndisp_of_100000_does_not_blame_max_disp(tmp_path, pair_files):
+    calib = tmp_path / "calib.txt"
+    calib.write_text("cam0=[100 0 24; 0 100 16; 0 0 1]\ndoffs=0\nbaseline=50\nndisp=100000\n")
+    result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm", "--calib", calib, "-v")
+    assert "ndisp=100000 is half the image width or more" in result.output
+    assert "must be less than the image width" not in result.output
