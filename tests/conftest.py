@@ -39,3 +39,14 @@ def random_pair(rng, height=14, width=20, shift=2, channels=3):
     left = np.ascontiguousarray(wide[:, :width])
     right = np.ascontiguousarray(wide[:, shift:])
     return left, right
+
+
+@pytest.fixture
+def pair_files(tmp_path, rng):
+    """A small random pair (32 x 48, every disparity 3) written as l.png and r.png."""
+    import cv2
+
+    left, right = random_pair(rng, height=32, width=48, shift=3)
+    cv2.imwrite(str(tmp_path / "l.png"), left)
+    cv2.imwrite(str(tmp_path / "r.png"), right)
+    return tmp_path / "l.png", tmp_path / "r.png"

@@ -11,14 +11,6 @@ from vsmatch.cli import main
 from conftest import random_pair
 
 
-@pytest.fixture
-def pair_files(tmp_path, rng):
-    left, right = random_pair(rng, height=32, width=48, shift=3)
-    cv2.imwrite(str(tmp_path / "l.png"), left)
-    cv2.imwrite(str(tmp_path / "r.png"), right)
-    return tmp_path / "l.png", tmp_path / "r.png"
-
-
 def invoke(*args):
     return CliRunner().invoke(main, [str(a) for a in args])
 

@@ -27,14 +27,6 @@ def one_line_error(result, code=1):
     return lines[0]
 
 
-@pytest.fixture
-def pair_files(tmp_path, rng):
-    left, right = random_pair(rng, height=32, width=48, shift=3)
-    cv2.imwrite(str(tmp_path / "l.png"), left)
-    cv2.imwrite(str(tmp_path / "r.png"), right)
-    return tmp_path / "l.png", tmp_path / "r.png"
-
-
 def files_in(folder):
     return sorted(p.name for p in folder.iterdir())
 
