@@ -367,15 +367,15 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx
     if max_disp is not None and max_disp >= width:
         raise click.BadParameter(f"{max_disp} must be less than the image width ({width})",
                                  param_hint="'--max-disp'")
-    matches = search_range.feature_matches(left_image, right_image)
     if max_disp is None:
-        found = _estimate_range(left_image, right_image, left, matches)
+        found = _estimate_range(left_image, right_image, left)
         _verbose(ctx, f"{left}: {found.describe()}")
         min_disp = found.min_disp if min_disp is None else min_disp
         max_disp = max(found.max_disp, min_disp + 1)
     else:
         # Given a range, a pair the method cannot see is wrong is still named.
-        problem = search_range.pair_problem(matches)
+        problem = search_range.pair_problem(search_range.feature_matches(
+            left_image, right_image, max_width=search_range.CHECK_WIDTH))
         if problem is not None:
             _echo(ctx, f"warning: {left}: {problem}", err=True)
     min_disp = min_disp or 0
@@ -447,9 +447,9 @@ def _calibration(calib, focal, baseline, cx, cy, doffs) -> geometry.Calibration 
                                 doffs=doffs or 0.0)
 
 
-def _estimate_range(left_image, right_image, name, matches=None):
+def _estimate_range(left_image, right_image, name):
     try:
-        return search_range.estimate_disparity_range(left_image, right_image, matches)
+        return search_range.estimate_disparity_range(left_image, right_image)
     except ValueError as exc:
         raise click.ClickException(f"{name}: {exc}") from None
 
