@@ -35,7 +35,9 @@ MAX_MEGAPIXELS = 200.0
 #: Memory the whole-image arrays of a run take per pixel of one view, outside the cost
 #: volumes that the stripes bound: both views (6 bytes), their grey levels, gradients
 #: and census codes (36), the disparities, labels and refinement copies (~20). Measured:
-#: the 4x pair (5.7 Mpx) peaks at 1205 MB under a 1024 MB budget.
+#: Adirondack upscaled 4x and 6x (5.7 and 12.8 Mpx) searching 17 disparities peaks 101
+#: and 76 bytes per pixel above the warm start, its small cost volume included; so an
+#: image refused at 64 bytes per pixel certainly cannot fit the budget.
 IMAGE_BYTES_PER_PIXEL = 64
 
 
