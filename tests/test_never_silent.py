@@ -167,7 +167,7 @@ def test_unexpected_errors_are_one_line_and_debug_shows_them(pair_files, tmp_pat
 
 
 def test_a_very_thin_pair_without_a_range_is_one_line(tmp_path, rng):
-    left, right = random_pair(rng, height=4, width=2000, shift=3)
+    left, right = random_pair(rng, height=4, width=20000, shift=3)
     cv2.imwrite(str(tmp_path / "l.png"), left)
     cv2.imwrite(str(tmp_path / "r.png"), right)
     line = one_line_error(invoke("run", tmp_path / "l.png", tmp_path / "r.png", "-o",
