@@ -711,9 +711,10 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
             def done(job: batch.PairJob, outcome: batch.PairOutcome) -> None:
                 bar.set_postfix_str(job.output.name)
                 bar.update(1)
-                if outcome.error is None:
-                    _verbose(ctx, f"{job.describe()}: disparities {outcome.min_disp}.."
-                                  f"{outcome.max_disp}, {outcome.seconds:.2f} s")
+                if outcome.error is None and ctx.find_root().obj.get("verbose"):
+                    # Through the bar, which would otherwise draw over the line.
+                    bar.write(f"{job.describe()}: disparities {outcome.min_disp}.."
+                              f"{outcome.max_disp}, {outcome.seconds:.2f} s", file=sys.stderr)
             failures = batch.run_batch(todo, cfg, executor=executor, on_done=done)
     total = len(jobs_list) + len(unpaired)
     failed = len(failures) + len(unpaired)
