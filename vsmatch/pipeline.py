@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from . import (aggregation, cost, disparity, noise, optimization, photometric, pyramid,
-               refinement, sensitivity)
+from . import (aggregation, confidence, cost, disparity, noise, optimization, photometric,
+               pyramid, refinement, sensitivity)
 from .config import Config, CostConfig, load_config
 from .disparity import INVALID_DISPARITY
 from .images import to_grey
@@ -32,6 +32,10 @@ class MatchResult:
     stripes: int = 1  # stripes the full search ran in
     photometric: photometric.Correction | None = None  # the right view's colour map, if any
     search_range: tuple[int, int] | None = None  # (min_disp, max_disp) searched
+    # How likely each disparity is right, in [0, 1] (vsmatch.confidence); float32 (H, W).
+    confidence: np.ndarray | None = None
+    # The cost-curve features the confidence is made from (vsmatch.confidence).
+    curve: dict[str, np.ndarray] | None = None
 
 
 def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
@@ -137,6 +141,10 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int | None = None,
         labels = np.full(left.shape[:2], disparity.OCCLUDED, dtype=np.uint8)
         labels[:, keep] = result.labels
         result.labels = labels
+    confidence = np.zeros(left.shape[:2], dtype=np.float32)  # no candidate: no confidence
+    confidence[:, keep] = result.confidence
+    result.confidence = confidence
+    result.curve = None  # it describes the cropped views
     result.search_range = (min_disp, max_disp)
     return result
 
@@ -154,6 +162,10 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
     result = _coarse_to_fine(left, right, max_disp, cfg, levels)
     result.seconds = {**seconds, **result.seconds}
     result.photometric = correction
+    with _stage(result.seconds, "confidence"):
+        features = confidence.pixel_features(result.disparity, result.labels, left,
+                                             result.curve)
+        result.confidence = confidence.combine(features, result.disparity)
     return result
 
 
@@ -242,9 +254,11 @@ def _coarse_to_fine(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Con
     labels = None
     if coarse.labels is not None:
         labels = pyramid.upsample_nearest(coarse.labels, left.shape[:2])
+    # The band search keeps no cost curves: the coarse level's stand for them.
+    curve = {k: pyramid.upsample_nearest(v, left.shape[:2]) for k, v in coarse.curve.items()}
     return MatchResult(disparity=result, labels=labels, seconds=seconds, config=coarse.config,
                        noise_sigma=coarse.noise_sigma, levels=coarse.levels + 1,
-                       stripes=coarse.stripes)
+                       stripes=coarse.stripes, curve=curve)
 
 
 #: Bytes per pixel of the full search besides its two float32 cost volumes (census, arms,
@@ -296,18 +310,22 @@ def _full_search_in_stripes(left: np.ndarray, right: np.ndarray, max_disp: int,
         cfg = dataclasses.replace(cfg, noise=dataclasses.replace(cfg.noise, adapt=False))
     disp = np.empty((height, width), dtype=np.float32)
     labels = None
+    curve = {name: np.empty((height, width), np.float32) for name in confidence.CURVE_FEATURES}
     seconds: dict[str, float] = {}
     for first, stop, core_first, core_stop in layout:
         part = _full_search(left[first:stop], right[first:stop], max_disp, cfg)
-        disp[core_first:core_stop] = part.disparity[core_first - first:core_stop - first]
+        core = slice(core_first - first, core_stop - first)
+        disp[core_first:core_stop] = part.disparity[core]
         if part.labels is not None:
             if labels is None:
                 labels = np.empty((height, width), dtype=np.uint8)
-            labels[core_first:core_stop] = part.labels[core_first - first:core_stop - first]
+            labels[core_first:core_stop] = part.labels[core]
+        for name, values in part.curve.items():
+            curve[name][core_first:core_stop] = values[core]
         for name, value in part.seconds.items():
             seconds[name] = seconds.get(name, 0.0) + value
     return MatchResult(disparity=disp, labels=labels, seconds=seconds, config=cfg,
-                       noise_sigma=noise_sigma, stripes=len(layout))
+                       noise_sigma=noise_sigma, stripes=len(layout), curve=curve)
 
 
 def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
@@ -355,6 +373,8 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
             disp_l, disp_r = disparity.winner_takes_all_both(volume)
         else:
             disp_l = disparity.winner_takes_all(volume)
+    with stage("confidence"):
+        curve = confidence.curve_features(volume, disp_l, arms_l)
 
     labels = None
     if cfg.consistency.enabled:
@@ -386,5 +406,5 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
             result = refinement.median3(result)
 
     return MatchResult(disparity=result, labels=labels, seconds=seconds, config=cfg,
-                       noise_sigma=noise_sigma)
+                       noise_sigma=noise_sigma, curve=curve)
 

@@ -1,0 +1,158 @@
+"""Fit the confidence model on every dataset at once, and measure it against its peers.
+
+For each scene of each dataset under the data root: vsmatch (``--config``, default
+``default``) over the official range, the confidence features of every pixel, and
+whether its disparity is right by the dataset's measure (bad 1.0 on middlebury2 and the
+2005/2006 sets, bad 2.0 on Middlebury 2014, D1 on KITTI). A logistic model is fitted on
+the non-occluded pixels with ground truth, each dataset weighing the same and each scene
+the same within it. Printed per dataset: Hu and Mordohai's r (0 = a perfect ordering,
+about 1 = chance) of the fitted model, of the model fitted without that dataset (held
+out), of the left-right label alone, of the cost-curve margin alone, and of SGBM's
+kept/invalid mask (uniqueness 10, disp12MaxDiff 1) on its own disparity.
+
+    python scripts/fit_confidence.py [--data-root DIR] [--write]
+
+``--write`` stores the weights in vsmatch/confidence_weights.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from vsmatch import confidence, datasets, evaluation, pipeline
+from vsmatch.disparity import VALID
+from vsmatch.peers import sgbm_fill_from_left, sgbm_matcher
+
+DATASETS = ("middlebury2", "middlebury-third", "middlebury2014-quarter", "kitti2015")
+#: Pixels sampled per scene for the fit (all are used for the measures).
+SAMPLES = 30000
+WEIGHTS_FILE = Path(__file__).resolve().parents[1] / "vsmatch" / "confidence_weights.json"
+
+
+def fit_logistic(x: np.ndarray, y: np.ndarray, w: np.ndarray, l2: float = 1e-3,
+                 steps: int = 30) -> np.ndarray:
+    """Weighted logistic regression by Newton's method (IRLS), a little L2 for stability."""
+    beta = np.zeros(x.shape[1])
+    w = w / w.sum()
+    for _ in range(steps):
+        p = 1.0 / (1.0 + np.exp(-np.clip(x @ beta, -30, 30)))
+        gradient = x.T @ (w * (p - y)) + l2 * beta
+        hessian = (x * (w * p * (1 - p))[:, None]).T @ x + l2 * np.eye(x.shape[1])
+        step = np.linalg.solve(hessian, gradient)
+        beta -= step
+        if np.abs(step).max() < 1e-7:
+            break
+    return beta
+
+
+def sgbm_mask(scene) -> tuple[np.ndarray, np.ndarray]:
+    """SGBM's own disparity and its kept mask (uniqueness 10, disp12MaxDiff 1)."""
+    channels = 1 if scene.left.ndim == 2 else scene.left.shape[2]
+    matcher = sgbm_matcher(scene.max_disp, channels, min_disp=scene.min_disp)
+    matcher.setUniquenessRatio(10)
+    matcher.setDisp12MaxDiff(1)
+    raw = matcher.compute(scene.left, scene.right)
+    kept = raw >= scene.min_disp * 16
+    # Scored dense: the rejected pixels take the nearest kept one to the left.
+    return sgbm_fill_from_left(raw, scene.min_disp), kept
+
+
+def collect(data_root, config):
+    """Per dataset, per scene: features, correctness, the evaluated mask and peers."""
+    out = {}
+    for name in DATASETS:
+        try:
+            scenes = datasets.load_dataset(name, data_root)
+        except datasets.DatasetError as exc:
+            print(f"{name}: skipped ({exc})")
+            continue
+        scoring = evaluation.scoring_for(name)
+        rows = []
+        for scene in scenes:
+            result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp,
+                                  min_disp=scene.min_disp, config=config)
+            features = confidence.pixel_features(result.disparity, result.labels, scene.left,
+                                                 result.curve)
+            evaluated = evaluation.headline_mask(scene) & np.isfinite(scene.ground_truth)
+            correct = ~scoring.bad_map(result.disparity, scene.ground_truth)
+            usable = evaluated & ~confidence.out_of_view(result.disparity)
+            sgbm_disp, kept = sgbm_mask(scene)
+            sgbm_correct = ~scoring.bad_map(sgbm_disp, scene.ground_truth)
+            rows.append(dict(name=scene.name, features=features, correct=correct,
+                             evaluated=evaluated, usable=usable, disparity=result.disparity,
+                             labels=result.labels, sgbm=(kept, sgbm_correct)))
+            print(f"  {name}/{scene.name}", flush=True)
+        out[name] = rows
+    return out
+
+
+def training_set(data, names, rng):
+    xs, ys, ws = [], [], []
+    for name in names:
+        scenes = data[name]
+        for scene in scenes:
+            idx = np.flatnonzero(scene["usable"])
+            if idx.size > SAMPLES:
+                idx = rng.choice(idx, SAMPLES, replace=False)
+            features = scene["features"].reshape(len(confidence.FEATURES), -1)[:, idx].T
+            xs.append(features)
+            ys.append(scene["correct"].ravel()[idx])
+            ws.append(np.full(idx.size, 1.0 / (idx.size * len(scenes) * len(names))))
+    return np.concatenate(xs), np.concatenate(ys).astype(np.float64), np.concatenate(ws)
+
+
+def mean_r(scenes, confidence_of) -> tuple[float, float, float, float]:
+    """Mean over scenes of r, AUC, optimum and dense error."""
+    measures = [confidence.sparsification(confidence_of(s), s["correct"], s["evaluated"])
+                for s in scenes]
+    return tuple(float(np.mean([m[k] for m in measures]))
+                 for k in ("r", "auc", "optimum", "dense"))
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data-root", default=None)
+    parser.add_argument("--config", default="default")
+    parser.add_argument("--write", action="store_true")
+    args = parser.parse_args()
+    rng = np.random.default_rng(0)
+    data = collect(args.data_root, args.config)
+    names = list(data)
+    beta = fit_logistic(*training_set(data, names, rng))
+    held_out = {n: fit_logistic(*training_set(data, [m for m in names if m != n], rng))
+                for n in names}
+
+    def model(weights):
+        return lambda s: confidence.combine(s["features"], s["disparity"],
+                                            weights.astype(np.float32))
+
+    print(f"\n{'dataset':<24}{'model':>8}{'held out':>10}{'LR label':>10}{'margin':>8}"
+          f"{'SGBM mask':>11}   (r; AUC / optimum / dense error of the model)")
+    for name in names:
+        scenes = data[name]
+        r_model, auc, optimum, dense = mean_r(scenes, model(beta))
+        r_held = mean_r(scenes, model(held_out[name]))[0]
+        r_label = mean_r(scenes, lambda s: (s["labels"] == VALID).astype(np.float32))[0]
+        r_margin = mean_r(scenes, lambda s: s["features"][confidence.FEATURES.index(
+            "margin")])[0]
+        sgbm = [confidence.sparsification(s["sgbm"][0].astype(np.float32), s["sgbm"][1],
+                                          s["evaluated"])["r"] for s in scenes]
+        print(f"{name:<24}{r_model:8.3f}{r_held:10.3f}{r_label:10.3f}{r_margin:8.3f}"
+              f"{np.mean(sgbm):11.3f}   {auc:.2f} / {optimum:.2f} / {dense:.2f}")
+    weights = {k: round(float(v), 5) for k, v in zip(confidence.FEATURES, beta)}
+    print("\nweights:", json.dumps(weights))
+    if args.write:
+        WEIGHTS_FILE.write_text(json.dumps({
+            "note": "fitted by scripts/fit_confidence.py on " + ", ".join(names)
+                    + f" with config '{args.config}'",
+            "weights": weights}, indent=2) + "\n")
+        print(f"wrote {WEIGHTS_FILE}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

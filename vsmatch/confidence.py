@@ -1,0 +1,160 @@
+"""Confidence per pixel: how likely the disparity is right, in [0, 1].
+
+What the method already knows, per pixel (:func:`pixel_features`):
+
+- the cost curve where the winner was chosen: the margin to the second minimum at least
+  two disparities away, relative to it (a sharp, unique minimum), and the winner's
+  distance below the curve's mean;
+- the left-right check: passed, or rejected as mismatched or occluded, and how far the
+  nearest pixel that passed lies (how far a fill had to reach);
+- the support region's size (the cross arms) and the image texture around the pixel;
+- the distance to the nearest disparity jump;
+- how far inside the right view the match lies; out of view (no right pixel at its
+  disparity, x - d < 0) gives confidence 0.
+
+A logistic model combines them; its weights are fitted on the developers' data, all
+datasets together (``python scripts/fit_confidence.py`` re-fits them and writes
+``vsmatch/confidence_weights.json``). The confidence never changes the disparity.
+
+:func:`sparsification` measures a confidence as Hu and Mordohai do: keep the most
+confident 5 %, 10 %, ... 100 % of the pixels and average the error rate of what is kept.
+"""
+
+from __future__ import annotations
+
+import json
+from functools import lru_cache
+from importlib import resources
+
+import cv2
+import numpy as np
+
+from ._kernels.confidence import cost_curve
+from .disparity import VALID, MISMATCHED
+
+#: The features, in the order of the model's weights (a constant first).
+FEATURES = ("bias", "margin", "margin_sq", "below_mean", "valid", "mismatched",
+            "fill_distance", "support", "texture", "jump_distance", "view_edge")
+#: Curve features the full search hands on (through stripes and pyramid levels).
+CURVE_FEATURES = ("margin", "below_mean", "support")
+#: Distances (pixels) beyond which the fill and jump distances count the same.
+MAX_DISTANCE = 16.0
+#: The densities of the sparsification curve: 5 %, 10 %, ... 100 %.
+DENSITIES = np.arange(1, 21) / 20.0
+
+
+def curve_features(volume: np.ndarray, winners: np.ndarray,
+                   arms: np.ndarray | None) -> dict[str, np.ndarray]:
+    """The features of each pixel's cost curve (float32 maps): ``margin`` = (second
+    minimum at least 2 away - best) / second, ``below_mean`` = (mean - best) / mean, and
+    ``support`` = log(1 + the cross's arm lengths)."""
+    shape = volume.shape[:2]
+    best, second, mean = (np.empty(shape, np.float32) for _ in range(3))
+    cost_curve(volume, np.ascontiguousarray(winners, dtype=np.int32), 1, best, second, mean)
+    tiny = np.float32(1e-6)
+    features = {
+        "margin": (second - best) / np.maximum(second, tiny),
+        "below_mean": (mean - best) / np.maximum(mean, tiny),
+    }
+    if arms is None:
+        features["support"] = np.zeros(shape, np.float32)
+    else:
+        features["support"] = np.log1p(arms.astype(np.float32).sum(axis=0))
+    return {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in features.items()}
+
+
+def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.ndarray,
+                   curve: dict[str, np.ndarray]) -> np.ndarray:
+    """The :data:`FEATURES` of every pixel, ``(len(FEATURES), H, W)`` float32."""
+    shape = disparity.shape
+    valid = np.ones(shape, bool) if labels is None else labels == VALID
+    mismatched = np.zeros(shape, bool) if labels is None else labels == MISMATCHED
+    fill_distance = _distance_to(valid)
+    grey = left if left.ndim == 2 else cv2.cvtColor(left, cv2.COLOR_BGR2GRAY)
+    grey = grey.astype(np.float32)
+    gradient = np.abs(cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3)) + np.abs(
+        cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3))
+    texture = np.log1p(cv2.blur(gradient, (5, 5)))
+    finite = np.where(np.isfinite(disparity), disparity, 0).astype(np.float32)
+    jumps = np.zeros(shape, bool)
+    jumps[:, 1:] |= np.abs(np.diff(finite, axis=1)) > 1
+    jumps[1:, :] |= np.abs(np.diff(finite, axis=0)) > 1
+    jump_distance = _distance_to(jumps)
+    margin = np.clip(curve["margin"], 0, 1)
+    columns = {
+        "bias": np.ones(shape, np.float32),
+        "margin": margin,
+        "margin_sq": margin * margin,
+        "below_mean": np.clip(curve["below_mean"], 0, 1),
+        "valid": valid.astype(np.float32),
+        "mismatched": mismatched.astype(np.float32),
+        "fill_distance": np.log1p(fill_distance),
+        "support": curve["support"],
+        "texture": texture,
+        "jump_distance": np.log1p(jump_distance),
+        # How far inside the right view the match lies (near its left edge, little of
+        # the support region has a partner).
+        "view_edge": np.log1p(np.clip(np.arange(shape[1])[None, :] - finite, 0,
+                                      MAX_DISTANCE)),
+    }
+    return np.stack([columns[name] for name in FEATURES]).astype(np.float32)
+
+
+def _distance_to(mask: np.ndarray) -> np.ndarray:
+    """Distance (pixels, at most MAX_DISTANCE) from each pixel to the nearest True one."""
+    if not mask.any():
+        return np.full(mask.shape, MAX_DISTANCE, np.float32)
+    distance = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 3)
+    return np.minimum(distance, MAX_DISTANCE).astype(np.float32)
+
+
+@lru_cache(maxsize=None)
+def model_weights() -> np.ndarray:
+    """The fitted weights, one per :data:`FEATURES` entry."""
+    text = (resources.files("vsmatch") / "confidence_weights.json").read_text()
+    stored = json.loads(text)
+    return np.array([stored["weights"][name] for name in FEATURES], dtype=np.float32)
+
+
+def combine(features: np.ndarray, disparity: np.ndarray,
+            weights: np.ndarray | None = None) -> np.ndarray:
+    """Confidence in [0, 1] (float32): the logistic model over ``features``; 0 where the
+    disparity is invalid or points out of the right view (x - d < 0)."""
+    weights = model_weights() if weights is None else weights
+    score = np.tensordot(weights, features, axes=1)
+    confidence = (1.0 / (1.0 + np.exp(-np.clip(score, -30, 30)))).astype(np.float32)
+    confidence[out_of_view(disparity)] = 0.0
+    return confidence
+
+
+def out_of_view(disparity: np.ndarray) -> np.ndarray:
+    """Pixels without an estimate or whose match would lie left of the right view."""
+    columns = np.arange(disparity.shape[1], dtype=np.float32)[None, :]
+    with np.errstate(invalid="ignore"):
+        return ~np.isfinite(disparity) | (columns - disparity < -0.5)
+
+
+def sparsification(confidence: np.ndarray, correct: np.ndarray, evaluated: np.ndarray,
+                   seed: int = 0) -> dict[str, float]:
+    """Hu and Mordohai's measure over the ``evaluated`` pixels: ``auc`` is the error rate
+    (%) of the most confident 5 %, 10 %, ... 100 % averaged, ``optimum`` the same for a
+    perfect ordering, ``dense`` the error rate of all, and ``r`` = (auc - optimum) /
+    (dense - optimum): 0 a perfect ordering, about 1 no better than chance. Ties are
+    broken at random (``seed``), so a constant confidence gives r near 1."""
+    conf = confidence[evaluated].astype(np.float64)
+    bad = ~correct[evaluated]
+    count = conf.size
+    if count == 0:
+        return {"auc": float("nan"), "optimum": float("nan"), "dense": float("nan"),
+                "r": float("nan")}
+    tiebreak = np.random.default_rng(seed).random(count)
+    order = np.lexsort((tiebreak, -conf))
+    bad_sorted = np.cumsum(bad[order])
+    perfect = np.cumsum(np.sort(bad))  # the good pixels first
+    keep = np.maximum(1, np.round(DENSITIES * count).astype(int))
+    auc = float(np.mean(bad_sorted[keep - 1] / keep)) * 100
+    optimum = float(np.mean(perfect[keep - 1] / keep)) * 100
+    dense = float(bad.mean()) * 100
+    spread = dense - optimum
+    r = (auc - optimum) / spread if spread > 0 else 0.0
+    return {"auc": auc, "optimum": optimum, "dense": dense, "r": float(r)}
