@@ -5,7 +5,9 @@ For each scene of each dataset under the data root: vsmatch (``--config``, defau
 whether its disparity is right by the dataset's measure (bad 1.0 on middlebury2 and the
 2005/2006 sets, bad 2.0 on Middlebury 2014, D1 on KITTI). A logistic model is fitted on
 the non-occluded pixels with ground truth, each dataset weighing the same and each scene
-the same within it. Printed per dataset: Hu and Mordohai's r (0 = a perfect ordering,
+the same within it; the shipped confidence is that model times the matchability gate
+(vsmatch.confidence.matchability), which pairs with nothing to match (flat grey, unrelated
+noise, two different scenes) are measured against. Printed per dataset: Hu and Mordohai's r (0 = a perfect ordering,
 about 1 = chance) of the fitted model, of the model fitted without that dataset (held
 out), of the left-right label alone, of the cost-curve margin alone, and of SGBM's
 kept/invalid mask (uniqueness 10, disp12MaxDiff 1) on its own disparity.
@@ -30,6 +32,7 @@ from vsmatch.peers import sgbm_fill_from_left, sgbm_matcher
 DATASETS = ("middlebury2", "middlebury-third", "middlebury2014-quarter", "kitti2015")
 #: Pixels sampled per scene for the fit (all are used for the measures).
 SAMPLES = 30000
+NEGATIVES = "nothing to match"
 WEIGHTS_FILE = Path(__file__).resolve().parents[1] / "vsmatch" / "confidence_weights.json"
 
 
@@ -90,6 +93,44 @@ def collect(data_root, config):
     return out
 
 
+def negative_pairs(data_root, rng):
+    """Pairs with nothing to match, every pixel's disparity wrong: flat grey, two unrelated
+    noise images (sharp and smooth), and the left view of one real scene beside the
+    right view of another. Real data never shows these, so the model must see them."""
+    import cv2
+
+    pairs = []
+    for level in (40, 128, 220):
+        flat = np.full((180, 240, 3), level, np.uint8)
+        pairs.append((f"flat{level}", flat, flat.copy(), 48))
+    for k, sigma in enumerate((0, 1.5, 4)):
+        a, b = (rng.integers(0, 256, (180, 240, 3), dtype=np.uint8) for _ in range(2))
+        if sigma:
+            a, b = (cv2.GaussianBlur(v, (0, 0), sigma) for v in (a, b))
+        pairs.append((f"noise{k}", a, b, 48))
+    # Distinct scenes only (MotorcycleE is Motorcycle under other light, PianoL Piano).
+    scenes = [s for s in datasets.load_dataset("middlebury2014-quarter", data_root)
+              if s.name not in ("MotorcycleE", "PianoL")]
+    for first, second in zip(scenes, scenes[1:] + scenes[:1]):
+        right = cv2.resize(second.right, first.left.shape[1::-1])
+        pairs.append((f"{first.name}+{second.name}", first.left, right, first.max_disp))
+    return pairs
+
+
+def collect_negatives(data_root, config, rng):
+    rows = []
+    for name, left, right, max_disp in negative_pairs(data_root, rng):
+        result = pipeline.run(left, right, max_disp=max_disp, config=config)
+        features = confidence.pixel_features(result.disparity, result.labels, left,
+                                             result.curve)
+        shape = left.shape[:2]
+        rows.append(dict(name=name, features=features, correct=np.zeros(shape, bool),
+                         evaluated=np.ones(shape, bool),
+                         usable=~confidence.out_of_view(result.disparity),
+                         disparity=result.disparity, labels=result.labels))
+    return rows
+
+
 def training_set(data, names, rng):
     xs, ys, ws = [], [], []
     for name in names:
@@ -122,6 +163,8 @@ def main() -> int:
     rng = np.random.default_rng(0)
     data = collect(args.data_root, args.config)
     names = list(data)
+    # The pairs with nothing to match are measured, not fitted: the gate handles them.
+    data[NEGATIVES] = collect_negatives(args.data_root, args.config, rng)
     beta = fit_logistic(*training_set(data, names, rng))
     held_out = {n: fit_logistic(*training_set(data, [m for m in names if m != n], rng))
                 for n in names}
@@ -143,6 +186,10 @@ def main() -> int:
                                           s["evaluated"])["r"] for s in scenes]
         print(f"{name:<24}{r_model:8.3f}{r_held:10.3f}{r_label:10.3f}{r_margin:8.3f}"
               f"{np.mean(sgbm):11.3f}   {auc:.2f} / {optimum:.2f} / {dense:.2f}")
+    negatives = [float(model(beta)(s)[s["evaluated"]].mean()) for s in data[NEGATIVES]]
+    print(f"pairs with nothing to match: mean confidence {np.mean(negatives):.3f} "
+          f"(largest {max(negatives):.3f}, "
+          f"{data[NEGATIVES][int(np.argmax(negatives))]['name']})")
     weights = {k: round(float(v), 5) for k, v in zip(confidence.FEATURES, beta)}
     print("\nweights:", json.dumps(weights))
     if args.write:

@@ -12,8 +12,9 @@ What the method already knows, per pixel (:func:`pixel_features`):
 - how far inside the right view the match lies; out of view (no right pixel at its
   disparity, x - d < 0) gives confidence 0.
 
-A logistic model combines them; its weights are fitted on the developers' data, all
-datasets together (``python scripts/fit_confidence.py`` re-fits them and writes
+A logistic model combines them, gated by how clearly the neighbourhood matched at all
+(:func:`matchability`); its weights are fitted on the developers' data, all datasets
+together (``python scripts/fit_confidence.py`` re-fits them and writes
 ``vsmatch/confidence_weights.json``). The confidence never changes the disparity.
 
 :func:`sparsification` measures a confidence as Hu and Mordohai do: keep the most
@@ -37,6 +38,16 @@ FEATURES = ("bias", "margin", "margin_sq", "below_mean", "valid", "mismatched",
             "fill_distance", "support", "texture", "jump_distance", "view_edge")
 #: Curve features the full search hands on (through stripes and pyramid levels).
 CURVE_FEATURES = ("margin", "below_mean", "support")
+#: Added to the costs the curve's ratios divide by: a flat curve of tiny costs (a blank
+#: pair, where rounding alone separates the minima) must not look sharp. The aggregated
+#: costs of real scenes are 0.2-2.8 per pixel (cones: 1st-99th percentiles of the best
+#: and second costs).
+CURVE_FLOOR = 0.5
+#: The matchability gate: the margin's mean over a GATE_WINDOW square rising from
+#: GATE_FROM to GATE_TO. Measured (scripts/fit_confidence.py): the mean margin of a scene
+#: is 0.23-0.49 on the four datasets, 0.07-0.11 on pairs with nothing to match; the gate
+#: lowers r on Middlebury 2014 and KITTI and holds those pairs' mean confidence at 0.06.
+GATE_WINDOW, GATE_FROM, GATE_TO = 15, 0.08, 0.2
 #: Distances (pixels) beyond which the fill and jump distances count the same.
 MAX_DISTANCE = 16.0
 #: The densities of the sparsification curve: 5 %, 10 %, ... 100 %.
@@ -46,15 +57,16 @@ DENSITIES = np.arange(1, 21) / 20.0
 def curve_features(volume: np.ndarray, winners: np.ndarray,
                    arms: np.ndarray | None) -> dict[str, np.ndarray]:
     """The features of each pixel's cost curve (float32 maps): ``margin`` = (second
-    minimum at least 2 away - best) / second, ``below_mean`` = (mean - best) / mean, and
+    minimum at least 2 away - best) / (second + floor), ``below_mean`` = (mean - best) /
+    (mean + floor), and
     ``support`` = log(1 + the cross's arm lengths)."""
     shape = volume.shape[:2]
     best, second, mean = (np.empty(shape, np.float32) for _ in range(3))
     cost_curve(volume, np.ascontiguousarray(winners, dtype=np.int32), 1, best, second, mean)
-    tiny = np.float32(1e-6)
+    floor = np.float32(CURVE_FLOOR)
     features = {
-        "margin": (second - best) / np.maximum(second, tiny),
-        "below_mean": (mean - best) / np.maximum(mean, tiny),
+        "margin": (second - best) / (second + floor),
+        "below_mean": (mean - best) / (mean + floor),
     }
     if arms is None:
         features["support"] = np.zeros(shape, np.float32)
@@ -118,13 +130,24 @@ def model_weights() -> np.ndarray:
 
 def combine(features: np.ndarray, disparity: np.ndarray,
             weights: np.ndarray | None = None) -> np.ndarray:
-    """Confidence in [0, 1] (float32): the logistic model over ``features``; 0 where the
-    disparity is invalid or points out of the right view (x - d < 0)."""
+    """Confidence in [0, 1] (float32): the logistic model over ``features``, times the
+    :func:`matchability` of the pixel's neighbourhood; 0 where the disparity is invalid
+    or points out of the right view (x - d < 0)."""
     weights = model_weights() if weights is None else weights
     score = np.tensordot(weights, features, axes=1)
     confidence = (1.0 / (1.0 + np.exp(-np.clip(score, -30, 30)))).astype(np.float32)
+    confidence *= matchability(features[FEATURES.index("margin")])
     confidence[out_of_view(disparity)] = 0.0
     return confidence
+
+
+def matchability(margin: np.ndarray) -> np.ndarray:
+    """0 .. 1 from the mean cost-curve margin around each pixel (:data:`GATE_WINDOW`
+    square): where no curve has a clear minimum (a blank wall, two unrelated views)
+    nothing was really matched, whatever the other features say. The real scenes never
+    show that, so the model cannot learn it from them."""
+    local = cv2.blur(np.clip(margin, 0, 1).astype(np.float32), (GATE_WINDOW, GATE_WINDOW))
+    return np.clip((local - GATE_FROM) / (GATE_TO - GATE_FROM), 0, 1).astype(np.float32)
 
 
 def out_of_view(disparity: np.ndarray) -> np.ndarray:
