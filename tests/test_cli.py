@@ -181,12 +181,16 @@ def test_eval_json_has_the_documented_shape(data_dir, tmp_path):
     census = report["methods"]["census"]
     assert list(census["scenes"]) == ["tsukuba", "venus", "teddy", "cones"]
     cones = census["scenes"]["cones"]
-    assert set(cones) == {"nonocc", "all", "disc", "seconds", "metrics", "range"}
+    assert set(cones) == {"nonocc", "all", "disc", "seconds", "metrics", "range",
+                          "confidence"}
+    assert set(cones["confidence"]) == {"auc", "optimum", "dense", "r"}
+    assert 0 <= cones["confidence"]["r"] < 1
+    assert (tmp_path / "imgs" / "census" / "cones_confidence.pfm").exists()
     assert cones["range"] == [0, 59]
     assert cones["metrics"]["nonocc"]["bad1.0"] == cones["nonocc"]
     assert {"bad0.5", "bad2.0", "bad4.0", "avgerr", "rms", "A90", "invalid"} <= set(
         cones["metrics"]["all"])
-    assert set(census["avg"]) == {"nonocc", "all", "disc", "metrics"}
+    assert set(census["avg"]) == {"nonocc", "all", "disc", "metrics", "confidence"}
     assert (tmp_path / "imgs" / "census" / "teddy_error.png").exists()
 
 

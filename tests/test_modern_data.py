@@ -35,7 +35,8 @@ def test_kitti2012_layout_is_read_with_both_masks(tmp_path, rng):
                                  ranges={"000007": (0, 16)})
     assert report["metric"] == "out3" and report["threshold"] == 3.0
     figures = report["methods"]["m"]["scenes"]["000007"]
-    assert set(figures) == {"nonocc", "all", "metrics", "seconds", "range"}
+    assert set(figures) == {"nonocc", "all", "metrics", "seconds", "range",
+                            "confidence"}
     assert figures["all"] == figures["metrics"]["all"]["out3"]
 
 
@@ -124,7 +125,7 @@ def test_default_on_kitti2015_and_the_json_shape(data_dir, tmp_path):
     report = json.loads(out.read_text())
     assert report["metric"] == "D1"
     scenes = report["methods"]["default"]["scenes"]
-    assert set(scenes["000000"]) == {"all", "metrics", "seconds", "range"}
+    assert set(scenes["000000"]) == {"all", "metrics", "seconds", "range", "confidence"}
     assert scenes["000000"]["range"] == [0, 191]
     assert scenes["000000"]["all"] == scenes["000000"]["metrics"]["all"]["D1"]
     assert report["methods"]["default"]["avg"]["all"] <= 7.0  # measured 6.67 (7.96 before

@@ -65,7 +65,8 @@ def test_without_fill_rejected_pixels_are_invalid(rng):
 def test_run_reports_stage_times(rng):
     left, right = random_pair(rng, height=16, width=24)
     result = pipeline.run(left, right, max_disp=4, config="paper")
-    assert set(result.seconds) == {"cost", "arms", "aggregation", "wta", "consistency", "fill"}
+    assert set(result.seconds) == {"cost", "arms", "aggregation", "wta", "consistency", "fill",
+                                   "confidence"}
 
 
 @pytest.mark.parametrize("kwargs,message", [

@@ -9,7 +9,7 @@ import pytest
 from click.testing import CliRunner
 from plyfile import PlyData
 
-from vsmatch import geometry, io
+from vsmatch import confidence, geometry, io
 from vsmatch.cli import main
 
 from conftest import random_pair
@@ -40,12 +40,13 @@ def pair(tmp_path, rng):
 def test_cloud_points_reproject_to_their_pixels(pair):
     result = invoke("-v", "run", pair / "l.png", pair / "r.png", "-o", pair / "d.pfm",
                     "--calib", pair / "calib.txt", "--depth", pair / "z.pfm",
-                    "--cloud", pair / "c.ply", "--config", "paper")
+                    "--cloud", pair / "c.ply", "--config", "paper", "--min-confidence", 0)
     assert result.exit_code == 0, result.output
     assert "searching disparities 0..8" in result.output  # ndisp 9 sets the range
     disp = io.read_disparity(pair / "d.pfm")
     depth = io.read_disparity(pair / "z.pfm")
-    valid = np.isfinite(disp)
+    # Every pixel with a match inside the right view (out of view: never in a cloud).
+    valid = np.isfinite(disp) & ~confidence.out_of_view(disp)
     np.testing.assert_allclose(depth[valid], 500.0 * 100.0 / (disp[valid] + 2.0), rtol=1e-5)
     vertex = PlyData.read(str(pair / "c.ply"))["vertex"]
     x, y, z = (np.asarray(vertex[a], np.float64) for a in "xyz")

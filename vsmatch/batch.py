@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from . import io, pipeline
+from .confidence import keep_confident
 from .config import Config
 from .executors import Executor
 from .executors.serial import SerialExecutor
@@ -180,9 +181,16 @@ def recording_pairs(folder: Path, out_dir: Path, *, max_disp: int | None,
     return [], []
 
 
-def match_pair(job: PairJob, config: Config) -> PairOutcome:
-    """Read, match and write one pair; raises with a one-line message on failure. A
-    range a PNG output cannot hold is refused before the match."""
+def confidence_path(output: Path) -> Path:
+    """Where a pair's confidence goes beside its disparity: NAME_confidence.pfm."""
+    return output.with_name(f"{output.stem}_confidence.pfm")
+
+
+def match_pair(job: PairJob, config: Config, *, with_confidence: bool = False,
+               min_confidence: float | None = None) -> PairOutcome:
+    """Read, match and write one pair (and its confidence, when asked; pixels below
+    ``min_confidence`` marked invalid, when given); raises with a one-line message on
+    failure. A range a PNG output cannot hold is refused before the match."""
     start = time.perf_counter()
     io.check_distinct_paths([job.left, job.right], [job.output])
     if job.max_disp is not None:
@@ -198,8 +206,14 @@ def match_pair(job: PairJob, config: Config) -> PairOutcome:
         pipeline.check_pair(left, right, max_disp, config, min_disp)
     except ValueError as exc:
         raise ValueError(f"{job.left}: {exc}") from None
-    disp = pipeline.match(left, right, max_disp=max_disp, min_disp=min_disp, config=config)
-    io.write_disparity(job.output, disp)
+    result = pipeline.run(left, right, max_disp=max_disp, min_disp=min_disp, config=config)
+    disp = result.disparity
+    if min_confidence is not None:
+        disp = keep_confident(disp, result.confidence, min_confidence)
+    with io.all_or_none():
+        io.write_disparity(job.output, disp)
+        if with_confidence:
+            io.write_confidence(confidence_path(job.output), result.confidence)
     return PairOutcome(None, min_disp, max_disp, time.perf_counter() - start)
 
 
@@ -209,16 +223,17 @@ def _check_png_range(path: Path, min_disp: int, max_disp: int) -> None:
         raise ValueError(problem)
 
 
-def _match_pair_quietly(job: PairJob, *, config: Config) -> PairOutcome:
+def _match_pair_quietly(job: PairJob, *, config: Config, **options) -> PairOutcome:
     """:func:`match_pair` in a worker: what it gave, its error as a message."""
     try:
-        return match_pair(job, config)
+        return match_pair(job, config, **options)
     except (ValueError, OSError) as exc:
         return PairOutcome(" ".join(str(exc).split()))
 
 
 def run_batch(jobs: list[PairJob], config: Config, *, executor: Executor | None = None,
-              on_done: Callable[[PairJob, PairOutcome], None] | None = None
+              on_done: Callable[[PairJob, PairOutcome], None] | None = None,
+              with_confidence: bool = False, min_confidence: float | None = None
               ) -> list[tuple[PairJob, str]]:
     """Match every job; returns the failures as ``(job, message)``, in job order.
 
@@ -227,7 +242,8 @@ def run_batch(jobs: list[PairJob], config: Config, *, executor: Executor | None 
     files that a killed task left beside its output are removed at the end.
     """
     failures = {}
-    task = functools.partial(_match_pair_quietly, config=config)
+    task = functools.partial(_match_pair_quietly, config=config,
+                             with_confidence=with_confidence, min_confidence=min_confidence)
     try:
         with executor or SerialExecutor() as runner:
             for job, outcome in runner.map_unordered(task, jobs):
@@ -240,4 +256,5 @@ def run_batch(jobs: list[PairJob], config: Config, *, executor: Executor | None 
     finally:
         for job in jobs:
             io.remove_stale_temporaries(job.output)
+            io.remove_stale_temporaries(confidence_path(job.output))
     return [(job, failures[job]) for job in jobs if job in failures]

@@ -18,9 +18,11 @@ import threading
 from pathlib import Path
 
 import click
+import numpy as np
 
-from . import (__version__, batch, datasets, evaluation, geometry, io, pipeline, search_range,
-               synthetic)
+from . import (__version__, batch, confidence, datasets, evaluation, geometry, io, pipeline,
+               search_range, synthetic)
+from .confidence import DEFAULT_MIN_CONFIDENCE
 from .config import ConfigError, bundled_config_names, config_from_dict, load_config
 from .executors import ExecutorError, make_executor
 from .peers import PEER_METHODS
@@ -130,6 +132,21 @@ class Finite(click.ParamType):
 
 
 FINITE, POSITIVE = Finite(), Finite(positive=True)
+
+
+class ConfidenceLevel(Finite):
+    """A confidence threshold in [0, 1]."""
+
+    name = "C"
+
+    def convert(self, value, param, ctx):
+        number = super().convert(value, param, ctx)
+        if not 0 <= number <= 1:
+            self.fail(f"{number:g} is not in [0, 1]", param, ctx)
+        return number
+
+
+CONFIDENCE_LEVEL = ConfidenceLevel()
 
 
 def _one_line(exc: BaseException) -> str:
@@ -319,13 +336,21 @@ def _writable(folder: Path) -> bool:
 @click.option("--preview", "preview_path", type=click.Path(dir_okay=False), default=None,
               help="Also write the disparity as a colour image here (.png or .jpg; "
                    "invalid pixels black).")
+@click.option("--confidence", "confidence_path", type=click.Path(dir_okay=False),
+              default=None, help="Also write each pixel's confidence in [0, 1] here (.pfm "
+              "float32, or .png 16-bit scaled to 0..65535).")
+@click.option("--min-confidence", type=CONFIDENCE_LEVEL, default=None, metavar="C",
+              help="Mark pixels whose confidence is below C invalid in every output. "
+                   "Default: -o stays dense; --depth and --cloud keep pixels at or above "
+                   f"{DEFAULT_MIN_CONFIDENCE:g} (0 keeps all).")
 @config_option
 @max_memory_option
 @verbosity_options
 @click.pass_context
 @friendly_errors
 def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx, cy,
-        doffs, depth_path, cloud_path, max_depth, preview_path, config, max_memory):
+        doffs, depth_path, cloud_path, max_depth, preview_path, confidence_path,
+        min_confidence, config, max_memory):
     """Compute the left-view disparity of a rectified stereo pair.
 
     \b
@@ -342,7 +367,11 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx
     if preview_path is not None and Path(preview_path).suffix.lower() not in (".png", ".jpg"):
         raise click.BadParameter(f"'{preview_path}' must end in .png or .jpg",
                                  param_hint="'--preview'")
-    outputs = [output, depth_path, cloud_path, preview_path]
+    if confidence_path is not None and (
+            Path(confidence_path).suffix.lower() not in io.CONFIDENCE_FORMATS):
+        raise click.BadParameter(f"'{confidence_path}' must end in .pfm or .png",
+                                 param_hint="'--confidence'")
+    outputs = [output, depth_path, cloud_path, preview_path, confidence_path]
     for extra in outputs[1:]:
         if extra is not None:
             _check_writable_folder(Path(extra))
@@ -391,18 +420,28 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx
     for path in outputs:
         if path is not None:
             io.remove_stale_temporaries(path)
+    disp = result.disparity
+    if min_confidence is not None:  # every output, the disparity too
+        disp = confidence.keep_confident(disp, result.confidence, min_confidence)
+    # Depth and clouds keep only what is likely right unless told otherwise.
+    metric_disp = confidence.keep_confident(
+        result.disparity, result.confidence,
+        DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence)
     with io.all_or_none():  # every output of the run, or none of them
-        io.write_disparity(out, result.disparity)
+        io.write_disparity(out, disp)
         if depth_path is not None:
-            io.write_depth(depth_path, geometry.depth_from_disparity(result.disparity, camera))
+            io.write_depth(depth_path, geometry.depth_from_disparity(metric_disp, camera))
         if cloud_path is not None:
-            points, colours = geometry.point_cloud(result.disparity, left_image, camera,
+            points, colours = geometry.point_cloud(metric_disp, left_image, camera,
                                                    max_depth=max_depth)
             io.write_point_cloud(cloud_path, geometry.ply_vertices(points, colours))
-            _verbose(ctx, f"{len(points)} points in the cloud")
+            _verbose(ctx, f"{len(points)} points in the cloud (confidence >= "
+                          f"{DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence:g}"
+                          f"; {int(np.isfinite(result.disparity).sum()) - len(points)} left out)")
         if preview_path is not None:
-            io.imwrite_atomic(preview_path, io.colour_disparity(result.disparity, max_disp,
-                                                                min_disp))
+            io.imwrite_atomic(preview_path, io.colour_disparity(disp, max_disp, min_disp))
+        if confidence_path is not None:
+            io.write_confidence(confidence_path, result.confidence)
     _report_run(ctx, result)
     for path in outputs:
         if path is not None:
@@ -656,12 +695,17 @@ def bench_command(ctx, data_root, config, repeats, no_cold, no_size, json_path):
                    "every worker.")
 @click.option("--overwrite", is_flag=True, help="Match pairs whose output already exists "
               "(only earlier outputs are replaced: an output may never name an input).")
+@click.option("--confidence", "with_confidence", is_flag=True,
+              help="Also write each pair's confidence beside its disparity "
+                   "(NAME_confidence.pfm, float32 in [0, 1]).")
+@click.option("--min-confidence", type=CONFIDENCE_LEVEL, default=None, metavar="C",
+              help="Mark pixels whose confidence is below C invalid in the disparities.")
 @max_memory_option
 @verbosity_options
 @click.pass_context
 @friendly_errors
 def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, overwrite,
-                  max_memory):
+                  with_confidence, min_confidence, max_memory):
     """Match every pair listed in a CSV file or found in a folder.
 
     \b
@@ -715,7 +759,9 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
                     # Through the bar, which would otherwise draw over the line.
                     bar.write(f"{job.describe()}: disparities {outcome.min_disp}.."
                               f"{outcome.max_disp}, {outcome.seconds:.2f} s", file=sys.stderr)
-            failures = batch.run_batch(todo, cfg, executor=executor, on_done=done)
+            failures = batch.run_batch(todo, cfg, executor=executor, on_done=done,
+                                       with_confidence=with_confidence,
+                                       min_confidence=min_confidence)
     total = len(jobs_list) + len(unpaired)
     failed = len(failures) + len(unpaired)
     _echo(ctx, f"matched {len(todo) - len(failures)} of {total} pairs"

@@ -20,10 +20,10 @@ import yaml
 from . import metrics
 from .config import Config, config_from_dict, load_config
 from .datasets import DATASETS, Scene
-from .io import (colour_disparity, error_image, imwrite_atomic, write_disparity,
-                 write_text_atomic)
+from .io import (colour_disparity, error_image, imwrite_atomic, write_confidence,
+                 write_disparity, write_text_atomic)
 from .peers import PEER_METHODS, sgbm_disparity
-from .pipeline import match
+from .pipeline import run
 
 # Re-exported: the bad-pixel functions evaluation has always offered.
 bad_pixel_map = metrics.bad_pixel_map
@@ -109,12 +109,21 @@ def average(per_scene: dict[str, dict[str, Any]]) -> dict[str, Any]:
 def method_runner(method) -> tuple[Callable, Config | None]:
     """A method name, config path or Config as ``(run(left, right, min_disp, max_disp),
     config)``; the config is None for a peer method (:data:`PEER_METHODS`)."""
+    run_full, cfg = full_runner(method)
+    return (lambda left, right, lo, hi: run_full(left, right, lo, hi)[0]), cfg
+
+
+def full_runner(method) -> tuple[Callable, Config | None]:
+    """As :func:`method_runner`, the run giving ``(disparity, confidence or None)``."""
     if method in PEER_METHODS:
-        return (lambda left, right, lo, hi: sgbm_disparity(left, right, max_disp=hi,
-                                                           min_disp=lo)), None
+        return (lambda left, right, lo, hi: (sgbm_disparity(left, right, max_disp=hi,
+                                                            min_disp=lo), None)), None
     cfg = load_config(method)
-    return (lambda left, right, lo, hi: match(left, right, max_disp=hi, min_disp=lo,
-                                              config=cfg)), cfg
+
+    def run_vsmatch(left, right, lo, hi):
+        result = run(left, right, max_disp=hi, min_disp=lo, config=cfg)
+        return result.disparity, result.confidence
+    return run_vsmatch, cfg
 
 
 def scene_ranges(scenes: list[Scene], auto: bool = False) -> dict[str, tuple[int, int]]:
@@ -149,18 +158,21 @@ def evaluate(scenes: list[Scene], methods: dict, *, dataset: str,
     report: dict[str, Any] = {"dataset": dataset, "metric": scoring.metric,
                               "threshold": scoring.threshold, "methods": {}}
     for name, method in methods.items():
-        run_method, cfg = method_runner(method)
+        run_method, cfg = full_runner(method)
         folder = None if out_dir is None else Path(out_dir) / _safe_name(name)
         per_scene = {}
         for scene in scenes:
             low, high = ranges[scene.name]
             start = time.perf_counter()
-            disp = run_method(scene.left, scene.right, low, high)
+            disp, conf = run_method(scene.left, scene.right, low, high)
             seconds = time.perf_counter() - start
             per_scene[scene.name] = {**score_scene(disp, scene, scoring), "seconds": seconds,
                                      "range": [low, high]}
+            if conf is not None:
+                per_scene[scene.name]["confidence"] = confidence_measures(disp, conf, scene,
+                                                                          scoring)
             if folder is not None:
-                save_scene_outputs(folder, scene, disp, scoring)
+                save_scene_outputs(folder, scene, disp, scoring, conf)
             if disparities is not None:
                 disparities[(name, scene.name)] = disp
             if on_done is not None:
@@ -170,7 +182,22 @@ def evaluate(scenes: list[Scene], methods: dict, *, dataset: str,
             write_text_atomic(folder / "config.yaml",
                               yaml.safe_dump(cfg.to_dict(), sort_keys=False))
         report["methods"][name] = {"scenes": per_scene, "avg": average(per_scene)}
+        measured = [s["confidence"] for s in per_scene.values() if "confidence" in s]
+        if measured:
+            report["methods"][name]["avg"]["confidence"] = {
+                k: float(np.mean([m[k] for m in measured])) for k in measured[0]}
     return report
+
+
+def confidence_measures(disp: np.ndarray, conf: np.ndarray, scene: Scene,
+                        scoring: Scoring) -> dict[str, float]:
+    """Hu and Mordohai's sparsification measures (:func:`vsmatch.confidence.sparsification`)
+    over the scene's non-occluded pixels with ground truth, errors by its headline measure."""
+    from .confidence import sparsification
+
+    evaluated = headline_mask(scene) & np.isfinite(scene.ground_truth)
+    correct = ~scoring.bad_map(disp, scene.ground_truth)
+    return sparsification(conf, correct, evaluated)
 
 
 def _safe_name(name: str) -> str:
@@ -181,10 +208,13 @@ def _safe_name(name: str) -> str:
 
 
 def save_scene_outputs(folder: Path, scene: Scene, disp: np.ndarray,
-                       scoring: Scoring) -> None:
-    """Disparity (PFM), colour-mapped disparity and error image of one scene."""
+                       scoring: Scoring, conf: np.ndarray | None = None) -> None:
+    """Disparity (PFM), colour-mapped disparity and error image of one scene, and its
+    confidence (PFM) when there is one."""
     folder.mkdir(parents=True, exist_ok=True)
     write_disparity(folder / f"{scene.name}.pfm", disp)
+    if conf is not None:
+        write_confidence(folder / f"{scene.name}_confidence.pfm", conf)
     imwrite_atomic(folder / f"{scene.name}_disp.png", colour_disparity(disp, scene.max_disp))
     imwrite_atomic(folder / f"{scene.name}_error.png",
                    error_image(disp, scoring.bad_map(disp, scene.ground_truth),
@@ -203,7 +233,7 @@ def format_tables(report: dict[str, Any]) -> str:
         return ""
     first = next(iter(methods.values()))
     scenes = list(first["scenes"])
-    masks = [m for m in first["avg"] if m != "metrics"]
+    masks = [m for m in first["avg"] if m not in ("metrics", "confidence")]
     width = max(20, *(len(m) + 2 for m in methods))
     cell = max(10, *(len(s) + 2 for s in scenes))
     lines = []
@@ -214,6 +244,14 @@ def format_tables(report: dict[str, Any]) -> str:
             cells = [result["scenes"][s][mask] for s in scenes] + [result["avg"][mask]]
             lines.append(name.ljust(width) + "".join(f"{v:{cell}.2f}" for v in cells))
         lines.append("")
+    rated = {n: r for n, r in methods.items() if "confidence" in r["avg"]}
+    if rated:
+        lines.append("confidence r (0 best)".ljust(width) + "".join(
+            f"{s:>{cell}}" for s in scenes) + f"{'avg':>{cell}}")
+        for name, result in rated.items():
+            cells = [result["scenes"][s]["confidence"]["r"] for s in scenes]
+            cells.append(result["avg"]["confidence"]["r"])
+            lines.append(name.ljust(width) + "".join(f"{v:{cell}.3f}" for v in cells))
     return "\n".join(lines).rstrip() + "\n"
 
 

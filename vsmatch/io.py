@@ -310,6 +310,24 @@ def write_disparity(path: str | Path, disp: np.ndarray) -> None:
                          f"(use {' or '.join(DISPARITY_FORMATS)})")
 
 
+#: Output formats of a confidence map, by file extension.
+CONFIDENCE_FORMATS = (".pfm", ".png")
+
+
+def write_confidence(path: str | Path, confidence: np.ndarray) -> None:
+    """A confidence map in [0, 1]: ``.pfm`` float32, or ``.png`` 16-bit scaled to
+    0 .. 65535."""
+    suffix = Path(path).suffix.lower()
+    if suffix == ".pfm":
+        imwrite_atomic(path, np.ascontiguousarray(confidence, dtype=np.float32))
+    elif suffix == ".png":
+        scaled = np.round(np.clip(confidence, 0, 1) * 65535).astype(np.uint16)
+        imwrite_atomic(path, scaled)
+    else:
+        raise ValueError(f"{path}: unknown confidence format '{suffix}' "
+                         f"(use {' or '.join(CONFIDENCE_FORMATS)})")
+
+
 def write_depth(path: str | Path, depth: np.ndarray) -> None:
     """Depth as float32 PFM (``inf`` where unknown), the baseline's unit."""
     if Path(path).suffix.lower() != ".pfm":
