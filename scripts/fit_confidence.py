@@ -103,11 +103,13 @@ def negative_pairs(data_root, rng):
     for level in (40, 128, 220):
         flat = np.full((180, 240, 3), level, np.uint8)
         pairs.append((f"flat{level}", flat, flat.copy(), 48))
-    for k, sigma in enumerate((0, 1.5, 4)):
-        a, b = (rng.integers(0, 256, (180, 240, 3), dtype=np.uint8) for _ in range(2))
+    for k, (sigma, height, width, max_disp) in enumerate(
+            [(s, 180, 240, 48) for s in (0, 1.5, 4)] + [(s, 120, 160, 32) for s in (0, 0, 2)]
+            + [(0, 240, 320, 64)]):
+        a, b = (rng.integers(0, 256, (height, width, 3), dtype=np.uint8) for _ in range(2))
         if sigma:
             a, b = (cv2.GaussianBlur(v, (0, 0), sigma) for v in (a, b))
-        pairs.append((f"noise{k}", a, b, 48))
+        pairs.append((f"noise{k}", a, b, max_disp))
     # Distinct scenes only (MotorcycleE is Motorcycle under other light, PianoL Piano).
     scenes = [s for s in datasets.load_dataset("middlebury2014-quarter", data_root)
               if s.name not in ("MotorcycleE", "PianoL")]

@@ -375,6 +375,8 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
             disp_l = disparity.winner_takes_all(volume)
     with stage("confidence"):
         curve = confidence.curve_features(volume, disp_l, arms_l)
+        raw = confidence.curve_features(aggregated, disp_l, None)
+        curve["raw_margin"] = raw["margin"]
 
     labels = None
     if cfg.consistency.enabled:
