@@ -89,38 +89,32 @@ def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
                    curve: dict[str, np.ndarray]) -> np.ndarray:
     """The :data:`FEATURES` of every pixel, ``(len(FEATURES), H, W)`` float32."""
     shape = disparity.shape
+    out = np.empty((len(FEATURES),) + shape, np.float32)
+    row = {name: out[k] for k, name in enumerate(FEATURES)}
+    row["bias"].fill(1.0)
+    np.clip(curve["margin"], 0, 1, out=row["margin"])
+    np.multiply(row["margin"], row["margin"], out=row["margin_sq"])
+    np.clip(curve["below_mean"], 0, 1, out=row["below_mean"])
+    np.clip(curve["raw_margin"], 0, 1, out=row["raw_margin"])
+    row["support"][:] = curve["support"]
     valid = np.ones(shape, bool) if labels is None else labels == VALID
-    mismatched = np.zeros(shape, bool) if labels is None else labels == MISMATCHED
-    fill_distance = _distance_to(valid)
+    row["valid"][:] = valid
+    row["mismatched"][:] = False if labels is None else labels == MISMATCHED
+    np.log1p(_distance_to(valid), out=row["fill_distance"])
     grey = left if left.ndim == 2 else cv2.cvtColor(left, cv2.COLOR_BGR2GRAY)
-    grey = grey.astype(np.float32)
-    gradient = np.abs(cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3)) + np.abs(
-        cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3))
-    texture = np.log1p(cv2.blur(gradient, (5, 5)))
+    gradient = np.abs(cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3))
+    gradient += np.abs(cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3))
+    np.log1p(cv2.blur(gradient, (5, 5)), out=row["texture"])
     finite = np.where(np.isfinite(disparity), disparity, 0).astype(np.float32)
     jumps = np.zeros(shape, bool)
     jumps[:, 1:] |= np.abs(np.diff(finite, axis=1)) > 1
     jumps[1:, :] |= np.abs(np.diff(finite, axis=0)) > 1
-    jump_distance = _distance_to(jumps)
-    margin = np.clip(curve["margin"], 0, 1)
-    columns = {
-        "bias": np.ones(shape, np.float32),
-        "margin": margin,
-        "margin_sq": margin * margin,
-        "below_mean": np.clip(curve["below_mean"], 0, 1),
-        "raw_margin": np.clip(curve["raw_margin"], 0, 1),
-        "valid": valid.astype(np.float32),
-        "mismatched": mismatched.astype(np.float32),
-        "fill_distance": np.log1p(fill_distance),
-        "support": curve["support"],
-        "texture": texture,
-        "jump_distance": np.log1p(jump_distance),
-        # How far inside the right view the match lies (near its left edge, little of
-        # the support region has a partner).
-        "view_edge": np.log1p(np.clip(np.arange(shape[1])[None, :] - finite, 0,
-                                      MAX_DISTANCE)),
-    }
-    return np.stack([columns[name] for name in FEATURES]).astype(np.float32)
+    np.log1p(_distance_to(jumps), out=row["jump_distance"])
+    # How far inside the right view the match lies (near its left edge, little of the
+    # support region has a partner).
+    inside = np.arange(shape[1], dtype=np.float32)[None, :] - finite
+    np.log1p(np.clip(inside, 0, MAX_DISTANCE), out=row["view_edge"])
+    return out
 
 
 def _distance_to(mask: np.ndarray) -> np.ndarray:

@@ -16,15 +16,18 @@ def cost_curve(volume, disp, exclude, out_best, out_second, out_mean):
     for y in prange(height):
         for x in range(width):
             d1 = disp[y, x]
-            best = volume[y, x, d1]
-            second = np.inf
-            total = 0.0
+            costs = volume[y, x]
             inside = min(n_disp, x + 1)
+            total = np.float32(0.0)
             for d in range(inside):
-                c = volume[y, x, d]
-                total += c
-                if abs(d - d1) > exclude and c < second:
-                    second = c
+                total += costs[d]
+            # The second minimum in two branch-free runs, either side of the winner.
+            second = np.float32(np.inf)
+            for d in range(0, max(0, d1 - exclude)):
+                second = min(second, costs[d])
+            for d in range(d1 + exclude + 1, inside):
+                second = min(second, costs[d])
+            best = costs[d1]
             out_best[y, x] = best
             out_second[y, x] = second if second < np.inf else best
             out_mean[y, x] = total / inside
