@@ -27,12 +27,7 @@ def main() -> int:
     print(f"{'dataset':<24}{'scene':<13}{'true max':>9}{'sparse':>8}{'dense':>8}"
           f"{'auto':>6}{'official':>9}{'covered':>8}{'seconds':>8}")
     uncovered = 0
-    for name in DATASETS:
-        try:
-            scenes = datasets.load_dataset(name, args.data_root)
-        except datasets.DatasetError as exc:
-            print(f"{name}: skipped ({exc})")
-            continue
+    for name, scenes in datasets.load_available(DATASETS, args.data_root).items():
         for scene in scenes:
             mask = scene.masks.get("nonocc", scene.masks["all"])
             true_max = float(scene.ground_truth[mask].max())

@@ -67,12 +67,7 @@ def sgbm_mask(scene) -> tuple[np.ndarray, np.ndarray]:
 def collect(data_root, config):
     """Per dataset, per scene: features, correctness, the evaluated mask and peers."""
     out = {}
-    for name in DATASETS:
-        try:
-            scenes = datasets.load_dataset(name, data_root)
-        except datasets.DatasetError as exc:
-            print(f"{name}: skipped ({exc})")
-            continue
+    for name, scenes in datasets.load_available(DATASETS, data_root).items():
         scoring = evaluation.scoring_for(name)
         rows = []
         for scene in scenes:

@@ -65,12 +65,7 @@ def periodic(shift: int, period: int = 24, height: int = 200, width: int = 400, 
 
 
 def scenes(data_root):
-    for name in DATASETS:
-        try:
-            found = datasets.load_dataset(name, data_root)
-        except datasets.DatasetError as exc:
-            print(f"{name}: skipped ({exc})")
-            continue
+    for name, found in datasets.load_available(DATASETS, data_root).items():
         for scene in found:
             mask = scene.masks.get("nonocc", scene.masks["all"]) & np.isfinite(
                 scene.ground_truth)

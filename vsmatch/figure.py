@@ -45,7 +45,43 @@ def results_figure(scenes: list[Scene], report: dict[str, Any],
             figure = report["methods"][method]["scenes"][scene.name]
             headline = figure.get("nonocc", figure.get("all"))
             tiles.append(_label(errors, f"{scene.name} {headline:.2f} %"))
-        rows.append([_fit(t, ROW_HEIGHT) for t in tiles])
+        rows.append(tiles)
+    return _grid(titles, rows)
+
+
+def confidence_figure(scenes: list[Scene], results: dict, scoring: Scoring,
+                      threshold: float) -> np.ndarray:
+    """How to read the confidence, one row per scene: the left view, the disparity, the
+    confidence (black 0 .. white 1), and the errors it flags at ``threshold``: wrong
+    pixels below it green (flagged), wrong pixels above it red (missed), right pixels
+    below it blue (left out though right); the rest grey. ``results[scene name]`` is a
+    :class:`vsmatch.pipeline.MatchResult`."""
+    titles = ["left view", "disparity", "confidence (black 0, white 1)",
+              f"errors < {threshold:g}: green flagged, red missed; blue right, cut"]
+    rows = []
+    for scene in scenes:
+        result = results[scene.name]
+        top = float(scene.ground_truth.max()) or float(max(scene.max_disp, 1))
+        conf = (np.clip(result.confidence, 0, 1) * 255).astype(np.uint8)
+        bad = scoring.bad_map(result.disparity, scene.ground_truth)
+        known = headline_mask(scene) & np.isfinite(scene.ground_truth)
+        low = result.confidence < threshold
+        grey = cv2.cvtColor(cv2.cvtColor(scene.left, cv2.COLOR_BGR2GRAY)
+                            if scene.left.ndim == 3 else scene.left, cv2.COLOR_GRAY2BGR)
+        flags = (grey // 2 + 64).astype(np.uint8)
+        flags[~known] //= 3
+        flags[known & bad & low] = (0, 200, 0)
+        flags[known & bad & ~low] = (0, 0, 255)
+        flags[known & ~bad & low] = (255, 120, 0)
+        flagged = (known & bad & low).sum() / max(1, (known & bad).sum())
+        rows.append([scene.left, colour_disparity(result.disparity, top), conf,
+                     _label(flags, f"{scene.name}: {100 * flagged:.0f} % of errors flagged")])
+    return _grid(titles, rows)
+
+
+def _grid(titles: list[str], rows: list[list[np.ndarray]]) -> np.ndarray:
+    """Tiles in rows of one height under a header of titles, white gaps between."""
+    rows = [[_fit(t, ROW_HEIGHT) for t in row] for row in rows]
     widths = [max(row[k].shape[1] for row in rows) for k in range(len(titles))]
     header = np.full((TITLE_HEIGHT, sum(widths) + GAP * (len(widths) - 1), 3), 255, np.uint8)
     x = 0

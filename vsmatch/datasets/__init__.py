@@ -84,3 +84,16 @@ def load_dataset(dataset: str, data_root: str | Path | None = None, names=None) 
         raise DatasetError(f"dataset '{dataset}': no scenes in "
                            f"{dataset_folder(dataset, data_root)}")
     return scenes
+
+
+def load_available(names, data_root: str | Path | None = None,
+                   report=print) -> dict[str, list[Scene]]:
+    """The scenes of each of ``names`` that is found; a missing one is reported and
+    skipped (the scripts measure over whatever data a machine has)."""
+    found = {}
+    for name in names:
+        try:
+            found[name] = load_dataset(name, data_root)
+        except DatasetError as exc:
+            report(f"{name}: skipped ({exc})")
+    return found
