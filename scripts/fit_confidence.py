@@ -64,11 +64,26 @@ def sgbm_mask(scene) -> tuple[np.ndarray, np.ndarray]:
     return sgbm_fill_from_left(raw, scene.min_disp), kept
 
 
-def collect(data_root, config):
-    """Per dataset, per scene: features, correctness, the evaluated mask and peers."""
+def grey_scene(scene):
+    """The scene with grey views (the held-out benchmarks include grey-scale cameras)."""
+    import dataclasses
+
+    import cv2
+
+    return dataclasses.replace(scene, left=cv2.cvtColor(scene.left, cv2.COLOR_BGR2GRAY),
+                               right=cv2.cvtColor(scene.right, cv2.COLOR_BGR2GRAY))
+
+
+def collect(data_root, config, grey=True):
+    """Per dataset, per scene: features, correctness, the evaluated mask and peers; with
+    ``grey``, each dataset again with grey views as a dataset of its own."""
     out = {}
-    for name, scenes in datasets.load_available(DATASETS, data_root).items():
-        scoring = evaluation.scoring_for(name)
+    available = datasets.load_available(DATASETS, data_root)
+    if grey:
+        available.update({f"{name} (grey)": [grey_scene(s) for s in scenes]
+                          for name, scenes in list(available.items())})
+    for name, scenes in available.items():
+        scoring = evaluation.scoring_for(name.split()[0])
         rows = []
         for scene in scenes:
             result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp,
@@ -163,8 +178,9 @@ def main() -> int:
     # The pairs with nothing to match are measured, not fitted: the gate handles them.
     data[NEGATIVES] = collect_negatives(args.data_root, args.config, rng)
     beta = fit_logistic(*training_set(data, names, rng))
-    held_out = {n: fit_logistic(*training_set(data, [m for m in names if m != n], rng))
-                for n in names}
+    # Held out: without the dataset, in colour and in grey.
+    held_out = {n: fit_logistic(*training_set(
+        data, [m for m in names if m.split()[0] != n.split()[0]], rng)) for n in names}
 
     def model(weights):
         return lambda s: confidence.combine(s["features"], s["disparity"],
