@@ -38,8 +38,21 @@ def test_curve_features_see_a_sharp_and_a_flat_minimum():
     volume[0, 0, 4] = 0.2  # a sharp, unique minimum
     volume[0, 1, :] = 0.01  # flat: nothing chosen
     volume[0, 1, 3] = 0.0
-    features = confidence.curve_features(volume, np.array([[4, 3]], np.int32), None)
+    winners = np.array([[4, 3]], np.int32)
+    features = confidence.curve_features(confidence.cost_curves(volume, winners), None)
     assert features["margin"][0, 0] > 0.7 and features["margin"][0, 1] < 0.05
+
+
+def test_the_winner_takes_all_pass_gives_the_same_curves(rng):
+    from vsmatch import disparity
+
+    volume = rng.random((7, 30, 12)).astype(np.float32)
+    left, right = disparity.winner_takes_all_both(volume)
+    left2, right2, curves = disparity.winner_takes_all_with_curve(volume)
+    np.testing.assert_array_equal(left, left2)
+    np.testing.assert_array_equal(right, right2)
+    for fused, separate in zip(curves, confidence.cost_curves(volume, left)):
+        np.testing.assert_array_equal(fused, separate)
 
 
 # --- the disparity is untouched ----------------------------------------------------------
@@ -51,8 +64,8 @@ def test_the_confidence_does_not_change_the_disparity(rng, monkeypatch):
     assert with_it.confidence.dtype == np.float32
     assert 0 <= with_it.confidence.min() and with_it.confidence.max() <= 1
     # With the confidence's work replaced by constants, the disparity is the same bytes.
-    monkeypatch.setattr(confidence, "curve_features", lambda volume, winners, arms: {
-        k: np.zeros(volume.shape[:2], np.float32) for k in confidence.CURVE_FEATURES})
+    monkeypatch.setattr(confidence, "curve_features", lambda curves, arms: {
+        k: np.zeros(curves[0].shape, np.float32) for k in confidence.CURVE_FEATURES})
     monkeypatch.setattr(confidence, "combine", lambda f, disp: np.zeros(disp.shape,
                                                                           np.float32))
     without = pipeline.run(left, right, max_disp=16)

@@ -64,15 +64,23 @@ MAX_DISTANCE = 16.0
 DENSITIES = np.arange(1, 21) / 20.0
 
 
-def curve_features(volume: np.ndarray, winners: np.ndarray,
-                   arms: np.ndarray | None) -> dict[str, np.ndarray]:
-    """The features of each pixel's cost curve (float32 maps): ``margin`` = (second
-    minimum at least 2 away - best) / (second + floor), ``below_mean`` = (mean - best) /
-    (mean + floor), and
-    ``support`` = log(1 + the cross's arm lengths)."""
-    shape = volume.shape[:2]
-    best, second, mean = (np.empty(shape, np.float32) for _ in range(3))
+def cost_curves(volume: np.ndarray, winners: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Each pixel's best cost, second minimum at least 2 away, and mean cost over its
+    in-view candidates (float32 maps); ``disparity.winner_takes_all_with_curve`` gives
+    the same from its own pass."""
+    best, second, mean = (np.empty(volume.shape[:2], np.float32) for _ in range(3))
     cost_curve(volume, np.ascontiguousarray(winners, dtype=np.int32), 1, best, second, mean)
+    return best, second, mean
+
+
+def curve_features(curves: tuple[np.ndarray, ...],
+                   arms: np.ndarray | None) -> dict[str, np.ndarray]:
+    """The features of each pixel's cost curve (float32 maps) from :func:`cost_curves`:
+    ``margin`` = (second minimum at least 2 away - best) / (second + floor),
+    ``below_mean`` = (mean - best) / (mean + floor), and ``support`` = log(1 + the
+    cross's arm lengths)."""
+    best, second, mean = curves
+    shape = best.shape
     floor = np.float32(CURVE_FLOOR)
     features = {
         "margin": (second - best) / (second + floor),

@@ -31,8 +31,21 @@ def winner_takes_all_both(volume: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`winner_takes_all` and :func:`winner_takes_all_right` in one pass."""
     out_l = np.empty(volume.shape[:2], dtype=np.int32)
     out_r = np.empty(volume.shape[:2], dtype=np.int32)
-    _k.winner_takes_all_both(volume, out_l, out_r)
+    none = np.empty((0, 0), np.float32)
+    _k.winner_takes_all_both(volume, out_l, out_r, 1, none, none, none)
     return out_l, out_r
+
+
+def winner_takes_all_with_curve(volume: np.ndarray, exclude: int = 1
+                                ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, ...]]:
+    """:func:`winner_takes_all_both`, and the left winners' cost curves (best, second
+    minimum at least ``exclude + 1`` away, mean; see ``vsmatch.confidence``) from the
+    same pass."""
+    out_l = np.empty(volume.shape[:2], dtype=np.int32)
+    out_r = np.empty(volume.shape[:2], dtype=np.int32)
+    curve = tuple(np.empty(volume.shape[:2], np.float32) for _ in range(3))
+    _k.winner_takes_all_both(volume, out_l, out_r, int(exclude), *curve)
+    return out_l, out_r, curve
 
 
 def left_right_check(disp_l: np.ndarray, disp_r: np.ndarray, *, n_disp: int,

@@ -368,15 +368,19 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
             volume = optimization.scanline_optimise(volume, left, right, cfg.scanline,
                                                     out=work)
 
-    with stage("wta"):
+    with stage("wta"):  # with the winners' cost curves, for the confidence
         if cfg.consistency.enabled:
-            disp_l, disp_r = disparity.winner_takes_all_both(volume)
+            disp_l, disp_r, curves = disparity.winner_takes_all_with_curve(volume)
         else:
             disp_l = disparity.winner_takes_all(volume)
+            curves = confidence.cost_curves(volume, disp_l)
     with stage("confidence"):
-        curve = confidence.curve_features(volume, disp_l, arms_l)
-        raw = confidence.curve_features(aggregated, disp_l, None)
-        curve["raw_margin"] = raw["margin"]
+        curve = confidence.curve_features(curves, arms_l)
+        if aggregated is not volume:  # the same margin before the scanline optimisation
+            raw = confidence.cost_curves(aggregated, disp_l)
+            curve["raw_margin"] = confidence.curve_features(raw, None)["margin"]
+        else:
+            curve["raw_margin"] = curve["margin"]
 
     labels = None
     if cfg.consistency.enabled:

@@ -4,30 +4,35 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS
 
 
+@njit(inline="always")
+def curve_at(costs, d1, inside, exclude):
+    """From one cost curve over its in-view candidates ``costs[:inside]``: the cost at
+    the chosen ``d1``, the smallest cost at least ``exclude + 1`` disparities away from
+    it (the second minimum; the best cost when there is none), and the mean cost."""
+    total = np.float32(0.0)
+    for d in range(inside):
+        total += costs[d]
+    # The second minimum in two branch-free runs, either side of the winner.
+    second = np.float32(np.inf)
+    for d in range(0, max(0, d1 - exclude)):
+        second = min(second, costs[d])
+    for d in range(d1 + exclude + 1, inside):
+        second = min(second, costs[d])
+    best = costs[d1]
+    return best, (second if second < np.inf else best), total / inside
+
+
 @njit(**KERNEL_OPTIONS)
 def cost_curve(volume, disp, exclude, out_best, out_second, out_mean):
-    """Per pixel, from its cost curve ``volume[y, x, :]`` over the candidates inside the
-    right view (d <= x): the cost at the chosen disparity ``disp[y, x]``, the smallest
-    cost at least ``exclude + 1`` disparities away from it (the second minimum; the best
-    cost when there is none), and the mean cost. The candidates outside the view hold
-    the volume's largest cost: counting them would make a curve of few candidates look
-    sharp."""
+    """Per pixel, :func:`curve_at` of its cost curve ``volume[y, x, :]`` over the
+    candidates inside the right view (d <= x) and the chosen disparity ``disp[y, x]``.
+    The candidates outside the view hold the volume's largest cost: counting them would
+    make a curve of few candidates look sharp."""
     height, width, n_disp = volume.shape
     for y in prange(height):
         for x in range(width):
-            d1 = disp[y, x]
-            costs = volume[y, x]
-            inside = min(n_disp, x + 1)
-            total = np.float32(0.0)
-            for d in range(inside):
-                total += costs[d]
-            # The second minimum in two branch-free runs, either side of the winner.
-            second = np.float32(np.inf)
-            for d in range(0, max(0, d1 - exclude)):
-                second = min(second, costs[d])
-            for d in range(d1 + exclude + 1, inside):
-                second = min(second, costs[d])
-            best = costs[d1]
+            best, second, mean = curve_at(volume[y, x], disp[y, x], min(n_disp, x + 1),
+                                          exclude)
             out_best[y, x] = best
-            out_second[y, x] = second if second < np.inf else best
-            out_mean[y, x] = total / inside
+            out_second[y, x] = second
+            out_mean[y, x] = mean

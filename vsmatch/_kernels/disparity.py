@@ -3,6 +3,7 @@ from numba import njit, prange
 
 from . import KERNEL_OPTIONS
 from .arms import colour_distance
+from .confidence import curve_at
 
 VALID, OCCLUDED, MISMATCHED = 0, 1, 2
 
@@ -30,8 +31,10 @@ def winner_takes_all(volume, out):
 
 
 @njit(**KERNEL_OPTIONS)
-def winner_takes_all_both(volume, out_l, out_r):
-    """:func:`winner_takes_all` of both views in one pass over the volume.
+def winner_takes_all_both(volume, out_l, out_r, exclude, out_best, out_second, out_mean):
+    """:func:`winner_takes_all` of both views in one pass over the volume, and, when the
+    ``out_best``... arrays are not empty, each left pixel's :func:`curve_at` while its
+    curve is in cache (the confidence's; a second pass over the volume cost as much).
 
     Right view: argmin_d volume[y, xr + d, d] over the d with xr + d inside the image; the
     right view's candidates of right pixel xr sit on a diagonal, (xr + d, d); reading
@@ -40,6 +43,7 @@ def winner_takes_all_both(volume, out_l, out_r):
     The updates are written as selects, without branches, so that they vectorise.
     """
     height, width, n_disp = volume.shape
+    curve = out_best.shape[0] > 0
     for y in prange(height):
         best_r = np.empty(width + n_disp, dtype=volume.dtype)
         best_rd = np.empty(width + n_disp, dtype=np.int32)
@@ -47,6 +51,12 @@ def winner_takes_all_both(volume, out_l, out_r):
         for x in range(width):
             costs = volume[y, x]
             out_l[y, x] = _argmin(costs, n_disp)
+            if curve:
+                best, second, mean = curve_at(costs, out_l[y, x], min(n_disp, x + 1),
+                                              exclude)
+                out_best[y, x] = best
+                out_second[y, x] = second
+                out_mean[y, x] = mean
             # Views from x's place on: indexes that Numba knows are >= 0 stay affine.
             cost_r = best_r[width - 1 - x:]
             disp_r = best_rd[width - 1 - x:]
