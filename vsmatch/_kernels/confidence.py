@@ -9,15 +9,21 @@ def curve_at(costs, d1, inside, exclude):
     """From one cost curve over its in-view candidates ``costs[:inside]``: the cost at
     the chosen ``d1``, the smallest cost at least ``exclude + 1`` disparities away from
     it (the second minimum; the best cost when there is none), and the mean cost."""
+    # One walk: the runs either side of the winner give the second minimum too.
     total = np.float32(0.0)
-    for d in range(inside):
-        total += costs[d]
-    # The second minimum in two branch-free runs, either side of the winner.
     second = np.float32(np.inf)
-    for d in range(0, max(0, d1 - exclude)):
-        second = min(second, costs[d])
-    for d in range(d1 + exclude + 1, inside):
-        second = min(second, costs[d])
+    near = max(0, d1 - exclude)
+    far = min(inside, d1 + exclude + 1)
+    for d in range(0, near):
+        c = costs[d]
+        total += c
+        second = min(second, c)
+    for d in range(near, far):
+        total += costs[d]
+    for d in range(far, inside):
+        c = costs[d]
+        total += c
+        second = min(second, c)
     best = costs[d1]
     return best, (second if second < np.inf else best), total / inside
 

@@ -34,7 +34,7 @@ def winner_takes_all(volume, out):
 def winner_takes_all_both(volume, out_l, out_r, exclude, out_best, out_second, out_mean):
     """:func:`winner_takes_all` of both views in one pass over the volume, and, when the
     ``out_best``... arrays are not empty, each left pixel's :func:`curve_at` while its
-    curve is in cache (the confidence's; a second pass over the volume cost as much).
+    row is in cache (the confidence's; a second pass over the volume cost as much).
 
     Right view: argmin_d volume[y, xr + d, d] over the d with xr + d inside the image; the
     right view's candidates of right pixel xr sit on a diagonal, (xr + d, d); reading
@@ -51,12 +51,6 @@ def winner_takes_all_both(volume, out_l, out_r, exclude, out_best, out_second, o
         for x in range(width):
             costs = volume[y, x]
             out_l[y, x] = _argmin(costs, n_disp)
-            if curve:
-                best, second, mean = curve_at(costs, out_l[y, x], min(n_disp, x + 1),
-                                              exclude)
-                out_best[y, x] = best
-                out_second[y, x] = second
-                out_mean[y, x] = mean
             # Views from x's place on: indexes that Numba knows are >= 0 stay affine.
             cost_r = best_r[width - 1 - x:]
             disp_r = best_rd[width - 1 - x:]
@@ -70,6 +64,13 @@ def winner_takes_all_both(volume, out_l, out_r, exclude, out_best, out_second, o
                 disp_r[d] = np.int32(d) if take else disp_r[d]
         for x in range(width):
             out_r[y, x] = best_rd[width - 1 - x]
+        if curve:  # the row's costs are still in cache; apart, the loop above vectorises
+            for x in range(width):
+                best, second, mean = curve_at(volume[y, x], out_l[y, x],
+                                              min(n_disp, x + 1), exclude)
+                out_best[y, x] = best
+                out_second[y, x] = second
+                out_mean[y, x] = mean
 
 
 @njit(**KERNEL_OPTIONS)
