@@ -41,9 +41,9 @@ FEATURES = ("bias", "margin", "margin_sq", "below_mean", "valid", "mismatched",
 #: Curve features the full search hands on (through stripes and pyramid levels).
 CURVE_FEATURES = ("margin", "below_mean", "support", "raw_margin")
 #: Added to the costs the curve's ratios divide by: a flat curve of tiny costs (a blank
-#: pair, where rounding alone separates the minima) must not look sharp. The aggregated
-#: costs of real scenes are 0.2-2.8 per pixel (cones: 1st-99th percentiles of the best
-#: and second costs).
+#: pair, where rounding alone separates the minima) must not look sharp. The costs the
+#: winner is chosen on are 0.2-2.8 per pixel on real scenes (cones: the 1st-99th
+#: percentiles of the best and second costs).
 CURVE_FLOOR = 0.5
 #: The matchability gate: each margin's mean over a GATE_WINDOW square rising from its
 #: FROM to its TO. Measured (scripts/fit_confidence.py): the mean margin of a scene is
