@@ -91,7 +91,7 @@ def test_run_errors_are_one_line_without_output(bad_inputs, monkeypatch, args, c
 
 def test_unwritable_output_folder(pair_files, tmp_path, monkeypatch):
     # As root every folder is writable, so the permission answer is simulated.
-    monkeypatch.setattr("vsmatch.cli._writable", lambda folder: False)
+    monkeypatch.setattr("vsmatch.cli.common.writable", lambda folder: False)
     result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm")
     assert result.exit_code == 1 and "is not writable" in result.output
 

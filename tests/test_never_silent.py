@@ -501,3 +501,14 @@ def test_a_placeholder_ndisp_of_100000_does_not_blame_max_disp(tmp_path, pair_fi
     result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm", "--calib", calib, "-v")
     assert "ndisp=100000 is half the image width or more" in result.output
     assert "must be less than the image width" not in result.output
+
+
+def test_output_into_a_closed_pipe_is_quiet(tmp_path, monkeypatch):
+    """`vsmatch ... | head`: no "Error: [Errno 32] Broken pipe", exit 141 as a shell
+    reports SIGPIPE."""
+    def closed(*args, **kwargs):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr("vsmatch.cli.datasets.echo", closed)
+    result = invoke("datasets", "list", "--data-root", tmp_path)
+    assert result.exit_code == 141 and "Broken pipe" not in result.output

@@ -1,0 +1,286 @@
+"""What every command shares: one-line errors and exit statuses, the common options,
+and small checks of output paths."""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+import sys
+from pathlib import Path
+
+import click
+
+from .. import batch, datasets, io
+from ..config import ConfigError, bundled_config_names, config_from_dict
+from ..executors import ExecutorError
+
+EXPECTED_ERRORS = (ConfigError, io.ImageError, datasets.DatasetError, batch.BatchError,
+                   ExecutorError, ValueError, OSError)
+
+#: Exit status after Ctrl-C (128 + SIGINT) and SIGTERM (128 + 15), as shells report them.
+EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143
+#: Exit status when the reader of our output went away (128 + SIGPIPE), as shells report it.
+EXIT_BROKEN_PIPE = 141
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread so that it unwinds like Ctrl-C: temporaries
+    are removed and the worker processes are ended on the way out."""
+
+
+def on_sigterm(signum, frame):
+    raise Terminated()
+
+
+def stop(exc: BaseException) -> None:
+    """The one line and exit status of an interruption."""
+    if isinstance(exc, Terminated):
+        click.echo("vsmatch: terminated", err=True)
+        sys.exit(EXIT_TERMINATED)
+    click.echo("vsmatch: interrupted", err=True)
+    sys.exit(EXIT_INTERRUPTED)
+
+
+def debugging() -> bool:
+    ctx = click.get_current_context(silent=True)
+    flag = bool(ctx and (ctx.find_root().obj or {}).get("debug"))
+    return flag or os.environ.get("VSMATCH_DEBUG", "") not in ("", "0")
+
+
+def friendly_errors(func):
+    """Turn the library's expected errors into one-line ClickExceptions (exit 1), any
+    other exception into one line naming the command (the traceback under --debug), and
+    Ctrl-C or SIGTERM into a one-line notice with exit status 130 or 143."""
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        try:
+            return func(*args, **kwargs)
+        except click.ClickException:
+            raise
+        except BrokenPipeError:  # `vsmatch ... | head`: the reader has what it wanted
+            try:  # Python's own flush at exit must stay quiet too
+                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            except (AttributeError, OSError, ValueError):  # no real stdout
+                pass
+            sys.exit(EXIT_BROKEN_PIPE)
+        except EXPECTED_ERRORS as exc:
+            if debugging():
+                raise
+            raise click.ClickException(one_line(exc)) from None
+        except KeyboardInterrupt as exc:
+            stop(exc)
+        except (Exception, RecursionError, MemoryError) as exc:
+            if debugging():
+                raise
+            ctx = click.get_current_context(silent=True)
+            where = " ".join(["vsmatch"] + (ctx.command_path.split()[1:] if ctx else []))
+            raise click.ClickException(
+                f"{where}: unexpected {type(exc).__name__}: {one_line(exc)[:300]} "
+                "(--debug shows the traceback)") from None
+    return wrapper
+
+
+def verbosity_options(func):
+    """-v, -q and --debug after the command name too (``vsmatch run ... -v``)."""
+    def setter(key):
+        def callback(ctx, param, value):
+            if value:
+                root = ctx.find_root().obj
+                root[key] = True
+                if key == "quiet":
+                    root["verbose"] = False
+                elif key == "verbose":
+                    root["verbose"] = not root.get("quiet")
+        return callback
+    for names, key, text in ((("-q", "--quiet"), "quiet", "Print only errors."),
+                             (("-v", "--verbose"), "verbose", "Print more (stage times, "
+                              "the range found, ...) on stderr."),
+                             (("--debug",), "debug", "Show the traceback of an "
+                              "unexpected error.")):
+        func = click.option(*names, key + "_flag", is_flag=True, expose_value=False,
+                            callback=setter(key), help=text)(func)
+    return func
+
+
+class Finite(click.ParamType):
+    """A finite float (nan and inf refused), optionally above a bound."""
+
+    name = "NUMBER"
+
+    def __init__(self, positive: bool = False):
+        self.positive = positive
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float) and math.isfinite(value):
+            number = value
+        else:
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                self.fail(f"'{value}' is not a number", param, ctx)
+            if not math.isfinite(number):
+                self.fail(f"'{value}' is not a finite number", param, ctx)
+        if self.positive and number <= 0:
+            self.fail(f"{number:g} must be greater than 0", param, ctx)
+        return number
+
+
+FINITE, POSITIVE = Finite(), Finite(positive=True)
+
+
+class ConfidenceLevel(Finite):
+    """A confidence threshold in [0, 1]."""
+
+    name = "C"
+
+    def convert(self, value, param, ctx):
+        number = super().convert(value, param, ctx)
+        if not 0 <= number <= 1:
+            self.fail(f"{number:g} is not in [0, 1]", param, ctx)
+        return number
+
+
+CONFIDENCE_LEVEL = ConfidenceLevel()
+
+
+def one_line(exc: BaseException) -> str:
+    text = str(exc).strip() or type(exc).__name__
+    return " ".join(text.split())
+
+
+def echo(ctx: click.Context, message: str, *, err: bool = False) -> None:
+    if not ctx.find_root().obj.get("quiet"):
+        click.echo(message, err=err)
+
+
+def verbose(ctx: click.Context, message: str) -> None:
+    if ctx.find_root().obj.get("verbose"):
+        click.echo(message, err=True)
+
+
+def config_option(func):
+    return click.option(
+        "--config", "config", default=None, metavar="NAME|PATH",
+        help=f"Method parameters: a bundled config ({', '.join(bundled_config_names())}) "
+             "or a YAML file. Default: 'default'.")(func)
+
+
+def max_memory_option(func):
+    return click.option(
+        "--max-memory", type=click.IntRange(min=16, max=1 << 20), default=None, metavar="MB",
+        help="Working-memory budget of the matching in MB (the config's memory.max_mb, "
+             "default 1024); larger images are matched in horizontal stripes.")(func)
+
+
+def scheduler_address(value: str | None) -> str | None:
+    from ..executors.cluster import check_scheduler
+
+    if value is not None:
+        try:
+            check_scheduler(value)
+        except ExecutorError as exc:
+            raise click.BadParameter(str(exc).split(": ", 1)[1],
+                                     param_hint="'--scheduler'") from None
+    return value
+
+
+def with_budget(cfg, max_memory: int | None):
+    """The config with ``--max-memory`` as its memory budget, if given."""
+    if max_memory is None:
+        return cfg
+    return config_from_dict({"memory": {"max_mb": max_memory}}, base=cfg)
+
+
+def data_root_option(func):
+    return click.option(
+        "--data-root", type=click.Path(file_okay=False), default=None,
+        help="Folder holding middlebury2/ (and middlebury-2005-2006-third/). Default: "
+             "$VSMATCH_DATA, else ./data, else ../shared/data.")(func)
+
+
+class MaxDisparity(click.ParamType):
+    """``--max-disp``: a whole number of pixels, or ``auto`` (None)."""
+
+    name = "N|auto"
+
+    def convert(self, value, param, ctx):
+        if value is None or isinstance(value, int):
+            return value
+        if str(value).strip().lower() == "auto":
+            return None
+        try:
+            number = int(value)
+        except ValueError:
+            self.fail(f"'{value}' is neither a whole number nor 'auto'", param, ctx)
+        if number <= 0:
+            self.fail(f"{number} must be at least 1", param, ctx)
+        return number
+
+
+MAX_DISP = MaxDisparity()
+
+
+class OneLineErrors(click.Group):
+    """A group whose every error is one line on stderr: Click's usage errors too, which
+    it would otherwise print over four lines with the usage text."""
+
+    def main(self, *args, **kwargs):
+        kwargs["standalone_mode"] = False
+        try:
+            result = super().main(*args, **kwargs)
+        except click.UsageError as exc:
+            where = exc.ctx.command_path if exc.ctx is not None else "vsmatch"
+            click.echo(f"Error: {exc.format_message()} (see '{where} --help')", err=True)
+            sys.exit(exc.exit_code)
+        except click.ClickException as exc:
+            exc.show()
+            sys.exit(exc.exit_code)
+        except KeyboardInterrupt as exc:
+            stop(exc)
+        except click.Abort:
+            stop(KeyboardInterrupt())
+        except (Exception, RecursionError, MemoryError) as exc:
+            # Outside a command (option parsing, start-up): still one line.
+            argv = kwargs.get("args", args[0] if args else None)
+            argv = sys.argv[1:] if argv is None else list(argv)
+            if os.environ.get("VSMATCH_DEBUG", "") not in ("", "0") or "--debug" in argv:
+                raise
+            click.echo(f"vsmatch: unexpected {type(exc).__name__}: {one_line(exc)[:300]} "
+                       "(--debug shows the traceback)", err=True)
+            sys.exit(1)
+        sys.exit(result if isinstance(result, int) else 0)
+
+
+def writable(folder: Path) -> bool:
+    return os.access(folder, os.W_OK)
+
+
+def check_writable_folder(path: Path) -> None:
+    folder = check_output_folder(path)
+    if not writable(folder):
+        raise click.ClickException(f"{path}: output folder '{folder}' is not writable")
+
+
+def check_output_folder(path: Path) -> Path:
+    """The folder ``path`` goes in, which must exist."""
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise click.ClickException(f"{path}: output folder '{folder}' does not exist")
+    return folder
+
+
+def check_png_range(path, min_disp: int, max_disp: int) -> None:
+    problem = io.png_range_problem(path, min_disp, max_disp)
+    if problem is not None:
+        raise click.ClickException(problem)
+
+
+def announce_compilation(ctx: click.Context) -> None:
+    """One line before the first run compiles the kernels (20-40 s of silence else)."""
+    from .._kernels import cache_is_cold
+
+    if cache_is_cold():
+        echo(ctx, "compiling the kernels once (about 30 s; later runs start at once)",
+              err=True)

@@ -1,0 +1,44 @@
+"""The ``vsmatch`` group: global options, and the SIGTERM handler."""
+
+from __future__ import annotations
+
+import signal
+import threading
+
+import click
+
+from .. import __version__
+from .common import OneLineErrors, on_sigterm
+
+@click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="vsmatch")
+@click.option("-q", "--quiet", is_flag=True, help="Print only errors.")
+@click.option("-v", "--verbose", is_flag=True,
+              help="Also print stage times and the estimated noise (on stderr).")
+@click.option("--debug", is_flag=True, help="Show the traceback of an unexpected error "
+              "(also VSMATCH_DEBUG=1).")
+@click.pass_context
+def main(ctx: click.Context, quiet: bool, verbose: bool, debug: bool) -> None:
+    """Dense stereo matching guided by visual sensitive information.
+
+    Wang, Pathan and Dev, "Stereo Matching Based on Visual Sensitive Information",
+    ICIVC 2021: census and gradient costs, cross-shaped aggregation guided by the
+    gradient direction, left-right check and filling.
+    """
+    ctx.ensure_object(dict)
+    ctx.obj["quiet"] = quiet
+    ctx.obj["verbose"] = verbose and not quiet
+    ctx.obj["debug"] = debug
+    _silence_opencv()
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, on_sigterm)
+
+
+def _silence_opencv() -> None:
+    """Keep OpenCV's decoders (libpng, ...) from printing beside our one-line errors."""
+    import cv2
+
+    try:
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    except AttributeError:  # an OpenCV build without the logging module
+        pass

@@ -1,0 +1,215 @@
+"""``vsmatch run``: one pair to a disparity, and depth, cloud, confidence, preview."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+import numpy as np
+
+from .. import confidence, geometry, io, pipeline, search_range
+from ..confidence import DEFAULT_MIN_CONFIDENCE
+from ..config import load_config
+from .common import (CONFIDENCE_LEVEL, FINITE, MAX_DISP, POSITIVE, announce_compilation,
+                     check_png_range, check_writable_folder, config_option, echo,
+                     friendly_errors, max_memory_option, verbose, verbosity_options,
+                     with_budget)
+
+from .main import main
+
+
+@main.command()
+@click.argument("left", type=click.Path(dir_okay=True))
+@click.argument("right", type=click.Path(dir_okay=True))
+@click.option("-o", "--output", type=click.Path(), required=True,
+              help="Disparity map to write: .pfm (float32, Middlebury; inf = invalid) or "
+                   ".png (16-bit, value = round(256 d), 0 = invalid).")
+@click.option("--max-disp", type=MAX_DISP, default=None,
+              help="Largest disparity searched, or 'auto' to estimate it from the pair. "
+                   "Default: the calibration's ndisp - 1, else auto.")
+@click.option("--min-disp", type=int, default=None,
+              help="Smallest disparity searched (may be negative); left pixels with no "
+                   "candidate in the range are invalid, as with OpenCV's minDisparity. "
+                   "Default: 0, or below 0 when the range found from the pair is.")
+@click.option("--calib", type=click.Path(dir_okay=False), default=None,
+              help="Calibration: a Middlebury 2014 calib.txt or a KITTI "
+                   "calib_cam_to_cam.txt (for --depth and --cloud, and the range).")
+@click.option("--focal", type=POSITIVE, default=None, help="Focal length in pixels "
+              "(instead of --calib; with --baseline).")
+@click.option("--baseline", type=POSITIVE, default=None,
+              help="Baseline, in the unit depth should come out in.")
+@click.option("--cx", type=FINITE, default=None, help="Principal point x (default: centre).")
+@click.option("--cy", type=FINITE, default=None, help="Principal point y (default: centre).")
+@click.option("--doffs", type=FINITE, default=None,
+              help="x-difference of the principal points, right minus left (default 0).")
+@click.option("--depth", "depth_path", type=click.Path(dir_okay=False), default=None,
+              help="Also write depth f*B/(d + doffs) here (.pfm, inf = unknown).")
+@click.option("--cloud", "cloud_path", type=click.Path(dir_okay=False), default=None,
+              help="Also write the coloured point cloud here (.ply, binary).")
+@click.option("--max-depth", type=POSITIVE, default=None,
+              help="Leave points farther than this out of the cloud.")
+@click.option("--preview", "preview_path", type=click.Path(dir_okay=False), default=None,
+              help="Also write the disparity as a colour image here (.png or .jpg; "
+                   "invalid pixels black).")
+@click.option("--confidence", "confidence_path", type=click.Path(dir_okay=False),
+              default=None, help="Also write each pixel's confidence in [0, 1] here (.pfm "
+              "float32, or .png 16-bit scaled to 0..65535).")
+@click.option("--min-confidence", type=CONFIDENCE_LEVEL, default=None, metavar="C",
+              help="Mark pixels whose confidence is below C invalid in every output. "
+                   "Default: -o stays dense; --depth and --cloud keep pixels at or above "
+                   f"{DEFAULT_MIN_CONFIDENCE:g} (0 keeps all).")
+@config_option
+@max_memory_option
+@verbosity_options
+@click.pass_context
+@friendly_errors
+def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx, cy,
+        doffs, depth_path, cloud_path, max_depth, preview_path, confidence_path,
+        min_confidence, config, max_memory):
+    """Compute the left-view disparity of a rectified stereo pair.
+
+    \b
+    Example:
+      vsmatch run imL.png imR.png -o disp.pfm --max-disp 59
+      vsmatch run im0.png im1.png -o disp.pfm --calib calib.txt --cloud scene.ply
+    """
+    out = Path(output)
+    _check_output_path(out)
+    if depth_path is not None and Path(depth_path).suffix.lower() != ".pfm":
+        raise click.BadParameter(f"'{depth_path}' must end in .pfm", param_hint="'--depth'")
+    if cloud_path is not None and Path(cloud_path).suffix.lower() != ".ply":
+        raise click.BadParameter(f"'{cloud_path}' must end in .ply", param_hint="'--cloud'")
+    if preview_path is not None and Path(preview_path).suffix.lower() not in (".png", ".jpg"):
+        raise click.BadParameter(f"'{preview_path}' must end in .png or .jpg",
+                                 param_hint="'--preview'")
+    if confidence_path is not None and (
+            Path(confidence_path).suffix.lower() not in io.CONFIDENCE_FORMATS):
+        raise click.BadParameter(f"'{confidence_path}' must end in .pfm or .png",
+                                 param_hint="'--confidence'")
+    outputs = [output, depth_path, cloud_path, preview_path, confidence_path]
+    for extra in outputs[1:]:
+        if extra is not None:
+            check_writable_folder(Path(extra))
+    io.check_distinct_paths([left, right, calib], outputs)
+    camera = _calibration(calib, focal, baseline, cx, cy, doffs)
+    if (depth_path or cloud_path) and camera is None:
+        raise click.UsageError("--depth and --cloud need --calib, or --focal and --baseline")
+    cfg = with_budget(load_config(config), max_memory)
+    # Refused before anything is decoded: a range a PNG cannot hold, an image too large.
+    if max_disp is not None:
+        check_png_range(out, min_disp or 0, max_disp)
+    left_image, right_image = io.read_pair(left, right, max_mb=cfg.memory.max_mb,
+                                           max_megapixels=cfg.memory.max_megapixels)
+    width = left_image.shape[1]
+    if max_disp is None and camera is not None:
+        ndisp = camera.search_range_for(width)
+        if ndisp is not None:
+            max_disp = (min_disp or 0) + ndisp - 1
+        elif camera.ndisp is not None:
+            verbose(ctx, f"{calib}: ndisp={camera.ndisp} is half the image width or more, "
+                          "taken as 'unknown': finding the range from the pair")
+    if max_disp is not None and max_disp >= width:
+        raise click.BadParameter(f"{max_disp} must be less than the image width ({width})",
+                                 param_hint="'--max-disp'")
+    if max_disp is None:
+        found = _estimate_range(left_image, right_image, left)
+        verbose(ctx, f"{left}: {found.describe()}")
+        min_disp = found.min_disp if min_disp is None else min_disp
+        max_disp = max(found.max_disp, min_disp + 1)
+    else:
+        # Given a range, a pair the method cannot see is wrong is still named.
+        problem = search_range.pair_problem(search_range.feature_matches(
+            left_image, right_image, max_width=search_range.CHECK_WIDTH))
+        if problem is not None:
+            echo(ctx, f"warning: {left}: {problem}", err=True)
+    min_disp = min_disp or 0
+    check_png_range(out, min_disp, max_disp)
+    try:
+        pipeline.check_pair(left_image, right_image, max_disp, cfg, min_disp)
+    except ValueError as exc:
+        raise click.ClickException(f"{left}: {exc}") from None
+    verbose(ctx, f"searching disparities {min_disp}..{max_disp}")
+    announce_compilation(ctx)
+    result = pipeline.run(left_image, right_image, max_disp=max_disp, min_disp=min_disp,
+                          config=cfg)
+    for path in outputs:
+        if path is not None:
+            io.remove_stale_temporaries(path)
+    disp = result.disparity
+    if min_confidence is not None:  # every output, the disparity too
+        disp = confidence.keep_confident(disp, result.confidence, min_confidence)
+    # Depth and clouds keep only what is likely right unless told otherwise.
+    metric_disp = confidence.keep_confident(
+        result.disparity, result.confidence,
+        DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence)
+    with io.all_or_none():  # every output of the run, or none of them
+        io.write_disparity(out, disp)
+        if depth_path is not None:
+            io.write_depth(depth_path, geometry.depth_from_disparity(metric_disp, camera))
+        if cloud_path is not None:
+            points, colours = geometry.point_cloud(metric_disp, left_image, camera,
+                                                   max_depth=max_depth)
+            io.write_point_cloud(cloud_path, geometry.ply_vertices(points, colours))
+            verbose(ctx, f"{len(points)} points in the cloud (confidence >= "
+                          f"{DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence:g}"
+                          f"; {int(np.isfinite(result.disparity).sum()) - len(points)} left out)")
+        if preview_path is not None:
+            io.imwrite_atomic(preview_path, io.colour_disparity(disp, max_disp, min_disp))
+        if confidence_path is not None:
+            io.write_confidence(confidence_path, result.confidence)
+    _report_run(ctx, result)
+    for path in outputs:
+        if path is not None:
+            echo(ctx, f"wrote {path}")
+
+
+def _check_output_path(path: Path) -> None:
+    suffix = path.suffix.lower()
+    if suffix not in io.DISPARITY_FORMATS:
+        raise click.BadParameter(f"'{path}' must end in .pfm (float32) or .png (16-bit)",
+                                 param_hint="'-o'")
+    check_writable_folder(path)
+
+
+def _calibration(calib, focal, baseline, cx, cy, doffs) -> geometry.Calibration | None:
+    """The camera from --calib, or from --focal and --baseline, or None."""
+    by_hand = {"--focal": focal, "--baseline": baseline, "--cx": cx, "--cy": cy,
+               "--doffs": doffs}
+    given = [k for k, v in by_hand.items() if v is not None]
+    if calib is not None:
+        if given:
+            raise click.UsageError(f"give --calib or {', '.join(given)}, not both")
+        return geometry.read_calibration(calib)
+    if not given:
+        return None
+    if focal is None or baseline is None:
+        raise click.UsageError("--focal and --baseline go together")
+    return geometry.Calibration(focal=focal, baseline=baseline, cx=cx, cy=cy,
+                                doffs=doffs or 0.0)
+
+
+def _estimate_range(left_image, right_image, name):
+    try:
+        return search_range.estimate_disparity_range(left_image, right_image)
+    except ValueError as exc:
+        raise click.ClickException(f"{name}: {exc}") from None
+
+
+def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
+    """Under --verbose: the estimated noise and the stage times."""
+    if result.noise_sigma is not None:
+        floor = result.config.noise.floor
+        action = "adapted" if result.noise_sigma > floor else "no adaptation"
+        verbose(ctx, f"estimated noise: {result.noise_sigma:.2f} grey levels "
+                      f"(floor {floor:g}: {action})")
+    if result.photometric is not None:
+        fit = result.photometric
+        verbose(ctx, f"exposure: matched colours differ by {fit.before:.1f} grey levels, "
+                      f"{fit.residual:.1f} after the right view's colour map "
+                      f"({fit.matches} pixels); colour term weight "
+                      f"{result.config.cost.ad_weight:.2f}")
+    if result.levels or result.stripes > 1:
+        verbose(ctx, f"full search {result.levels} pyramid level(s) down, in "
+                      f"{result.stripes} stripe(s)")
+    times = ", ".join(f"{k} {v:.3f}" for k, v in result.seconds.items())
+    verbose(ctx, f"seconds: {times}; total {sum(result.seconds.values()):.3f}")
