@@ -7,7 +7,7 @@ stderr, no traceback, no output file left behind), or an unexpected error (one l
 argument); 130 interrupted (Ctrl-C); 143 terminated (SIGTERM).
 """
 
-from . import batch, bench, datasets, demo, eval, run  # noqa: F401 - registers the commands
+from . import batch, bench, datasets, demo, eval, rectify, run  # noqa: F401 - registers them
 from .main import main
 
 __all__ = ["main"]

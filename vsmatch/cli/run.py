@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .. import confidence, geometry, io, pipeline, search_range
+from .. import confidence, geometry, io, pipeline, rig, search_range
 from ..confidence import DEFAULT_MIN_CONFIDENCE
 from ..config import load_config
 from .common import (CONFIDENCE_LEVEL, FINITE, MAX_DISP, POSITIVE, announce_compilation,
@@ -31,9 +31,18 @@ from .main import main
               help="Smallest disparity searched (may be negative); left pixels with no "
                    "candidate in the range are invalid, as with OpenCV's minDisparity. "
                    "Default: 0, or below 0 when the range found from the pair is.")
-@click.option("--calib", type=click.Path(dir_okay=False), default=None,
+@click.option("--calib", type=click.Path(dir_okay=False), multiple=True,
               help="Calibration: a Middlebury 2014 calib.txt or a KITTI "
-                   "calib_cam_to_cam.txt (for --depth and --cloud, and the range).")
+                   "calib_cam_to_cam.txt of a rectified pair; or a raw rig, whose views "
+                   "are rectified first: an OpenCV stereoCalibrate YAML/XML, a Kalibr "
+                   "camchain.yaml, or a ROS camera_info pair (--calib left.yaml --calib "
+                   "right.yaml). For --depth and --cloud, and the range.")
+@click.option("--alpha", type=click.FloatRange(0, 1), default=0.0, show_default=True,
+              help="Raw rigs: OpenCV's rectification alpha (0 keeps only valid pixels, "
+                   "1 every source pixel).")
+@click.option("--rectified", "rectified_dir", type=click.Path(file_okay=False),
+              default=None, help="Raw rigs: also keep the rectified pair here (im0.png, "
+                                 "im1.png and the rectified rig's calib.txt).")
 @click.option("--focal", type=POSITIVE, default=None, help="Focal length in pixels "
               "(instead of --calib; with --baseline).")
 @click.option("--baseline", type=POSITIVE, default=None,
@@ -63,7 +72,8 @@ from .main import main
 @verbosity_options
 @click.pass_context
 @friendly_errors
-def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx, cy,
+def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_dir, focal,
+        baseline, cx, cy,
         doffs, depth_path, cloud_path, max_depth, preview_path, confidence_path,
         min_confidence, config, max_memory):
     """Compute the left-view disparity of a rectified stereo pair.
@@ -90,9 +100,12 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx
     for extra in outputs[1:]:
         if extra is not None:
             check_writable_folder(Path(extra))
-    io.check_distinct_paths([left, right, calib], outputs)
-    camera = _calibration(calib, focal, baseline, cx, cy, doffs)
-    if (depth_path or cloud_path) and camera is None:
+    io.check_distinct_paths([left, right, *calib], outputs)
+    raw_rig = rig.read_rig(calib) if calib and rig.is_raw_rig(calib) else None
+    camera = None if raw_rig else _calibration(calib, focal, baseline, cx, cy, doffs)
+    if rectified_dir is not None and raw_rig is None:
+        raise click.UsageError("--rectified needs a raw rig's --calib")
+    if (depth_path or cloud_path) and camera is None and raw_rig is None:
         raise click.UsageError("--depth and --cloud need --calib, or --focal and --baseline")
     cfg = with_budget(load_config(config), max_memory)
     # Refused before anything is decoded: a range a PNG cannot hold, an image too large.
@@ -100,13 +113,21 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, focal, baseline, cx
         check_png_range(out, min_disp or 0, max_disp)
     left_image, right_image = io.read_pair(left, right, max_mb=cfg.memory.max_mb,
                                            max_megapixels=cfg.memory.max_megapixels)
+    if raw_rig is not None:
+        rectifier = rig.Rectifier(raw_rig, left_image.shape[1::-1], alpha)
+        left_image, right_image = rectifier.rectify(left_image, right_image)
+        camera = rectifier.calibration()
+        verbose(ctx, f"rectified with {', '.join(calib)}: f {camera.focal:.1f} px, "
+                     f"baseline {camera.baseline:g}")
+        if rectified_dir is not None:
+            write_rectified(rectified_dir, left_image, right_image, camera, max_disp)
     width = left_image.shape[1]
     if max_disp is None and camera is not None:
         ndisp = camera.search_range_for(width)
         if ndisp is not None:
             max_disp = (min_disp or 0) + ndisp - 1
         elif camera.ndisp is not None:
-            verbose(ctx, f"{calib}: ndisp={camera.ndisp} is half the image width or more, "
+            verbose(ctx, f"{calib[0]}: ndisp={camera.ndisp} is half the image width or more, "
                           "taken as 'unknown': finding the range from the pair")
     if max_disp is not None and max_disp >= width:
         raise click.BadParameter(f"{max_disp} must be less than the image width ({width})",
@@ -176,10 +197,13 @@ def _calibration(calib, focal, baseline, cx, cy, doffs) -> geometry.Calibration 
     by_hand = {"--focal": focal, "--baseline": baseline, "--cx": cx, "--cy": cy,
                "--doffs": doffs}
     given = [k for k, v in by_hand.items() if v is not None]
-    if calib is not None:
+    if calib:
         if given:
             raise click.UsageError(f"give --calib or {', '.join(given)}, not both")
-        return geometry.read_calibration(calib)
+        if len(calib) > 1:
+            raise click.UsageError("two --calib files are a ROS camera_info pair of a raw "
+                                   "rig; a rectified pair has one calibration file")
+        return geometry.read_calibration(calib[0])
     if not given:
         return None
     if focal is None or baseline is None:
@@ -213,3 +237,16 @@ def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
                       f"{result.stripes} stripe(s)")
     times = ", ".join(f"{k} {v:.3f}" for k, v in result.seconds.items())
     verbose(ctx, f"seconds: {times}; total {sum(result.seconds.values()):.3f}")
+
+
+def write_rectified(folder, left, right, camera: geometry.Calibration,
+                    max_disp: int | None) -> None:
+    """im0.png, im1.png and a Middlebury calib.txt of the rectified rig in ``folder``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    size = left.shape[1::-1]
+    with io.all_or_none():
+        io.imwrite_atomic(folder / "im0.png", left)
+        io.imwrite_atomic(folder / "im1.png", right)
+        io.write_text_atomic(folder / "calib.txt", rig.middlebury_calib_text(
+            camera, size, None if max_disp is None else max_disp + 1))

@@ -1,0 +1,47 @@
+"""``vsmatch rectify``: a raw rig's pair rectified, with the rectified rig's calib.txt."""
+
+from __future__ import annotations
+
+import click
+
+from .. import io, rig
+from .common import echo, friendly_errors, verbose, verbosity_options
+from .main import main
+from .run import write_rectified
+
+
+@main.command()
+@click.argument("left", type=click.Path(dir_okay=False))
+@click.argument("right", type=click.Path(dir_okay=False))
+@click.option("--calib", type=click.Path(dir_okay=False), multiple=True, required=True,
+              help="The raw rig: an OpenCV stereoCalibrate YAML/XML, a Kalibr "
+                   "camchain.yaml, or a ROS camera_info pair (--calib left.yaml --calib "
+                   "right.yaml).")
+@click.option("--to", "folder", type=click.Path(file_okay=False), required=True,
+              help="Folder for im0.png, im1.png and calib.txt (created if missing).")
+@click.option("--alpha", type=click.FloatRange(0, 1), default=0.0, show_default=True,
+              help="OpenCV's rectification alpha: 0 keeps only valid pixels, 1 every "
+                   "source pixel.")
+@verbosity_options
+@click.pass_context
+@friendly_errors
+def rectify(ctx, left, right, calib, folder, alpha):
+    """Rectify a raw stereo pair: im0.png, im1.png and a Middlebury-style calib.txt of
+    the rectified rig, which 'vsmatch run --calib' reads.
+
+    \b
+    Example:
+      vsmatch rectify raw_l.png raw_r.png --calib stereo.yaml --to rectified
+      vsmatch run rectified/im0.png rectified/im1.png -o d.pfm --calib rectified/calib.txt
+    """
+    io.check_distinct_paths([left, right, *calib], [f"{folder}/im0.png", f"{folder}/im1.png",
+                                                    f"{folder}/calib.txt"])
+    raw_rig = rig.read_rig(calib)
+    left_image, right_image = io.read_pair(left, right)
+    rectifier = rig.Rectifier(raw_rig, left_image.shape[1::-1], alpha)
+    left_image, right_image = rectifier.rectify(left_image, right_image)
+    camera = rectifier.calibration()
+    verbose(ctx, f"rectified: f {camera.focal:.1f} px, baseline {camera.baseline:g}, "
+                 f"principal point ({camera.cx:.1f}, {camera.cy:.1f})")
+    write_rectified(folder, left_image, right_image, camera, None)
+    echo(ctx, f"wrote {folder}/im0.png, im1.png, calib.txt")

@@ -1,0 +1,297 @@
+"""Raw stereo rigs: calibration files of unrectified cameras, and their rectification.
+
+A raw rig is two cameras with intrinsics, lens distortion and the pose of the second in
+the first's frame (X2 = R X1 + T). Read from, detected by content:
+
+- OpenCV FileStorage YAML or XML as ``cv2.stereoCalibrate`` users save it: ``K1``/``M1``/
+  ``cameraMatrix1``, ``D1``/``distCoeffs1``, the same for camera 2, ``R``, ``T``, and the
+  image size (``image_width``/``image_height`` or ``imageSize``; else the images' own);
+- a ROS ``camera_info`` pair (two files: left, then right), which carries its own
+  rectification (``rectification_matrix``) and projection (``projection_matrix``);
+- a Kalibr ``camchain.yaml`` (pinhole; ``radtan`` or ``equidistant`` (fisheye) distortion).
+
+:class:`Rectifier` computes the rectification maps once (OpenCV's ``stereoRectify`` and
+``initUndistortRectifyMap``, or their ``fisheye`` variants) and applies them to each pair.
+The rectified principal points may differ (``doffs``, as in Middlebury's calib.txt): forced
+together (``CALIB_ZERO_DISPARITY``), a verged rig's disparities grow by their distance (on
+a Middlebury 2014 scene made raw, 0..657 instead of 0..~200, and far fewer points kept);
+:meth:`Rectifier.calibration` is the rectified rig as a :class:`vsmatch.geometry.
+Calibration`, in the calibration's units. Disparity, depth and points are then in the
+*rectified* left camera's frame, as OpenCV's ``reprojectImageTo3D`` and ROS's
+``stereo_image_proc`` give them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+import yaml
+
+from .geometry import Calibration, CalibrationError
+
+#: Bytes of a calibration file read at most (real ones are a few kB).
+MAX_CALIBRATION_BYTES = 1 << 20
+
+
+@dataclass(frozen=True)
+class RawRig:
+    """Two cameras before rectification. ``model`` is ``pinhole`` or ``fisheye``
+    (equidistant); ``size`` is (width, height) or None (the images' own). ``rectify`` and
+    ``project``, when the file gives them (ROS), are each camera's rectification rotation
+    and rectified projection matrix."""
+
+    K1: np.ndarray
+    D1: np.ndarray
+    K2: np.ndarray
+    D2: np.ndarray
+    R: np.ndarray
+    T: np.ndarray
+    size: tuple[int, int] | None = None
+    model: str = "pinhole"
+    rectify: tuple[np.ndarray, np.ndarray] | None = None
+    project: tuple[np.ndarray, np.ndarray] | None = None
+
+
+def is_raw_rig(paths) -> bool:
+    """Whether the ``--calib`` file(s) describe a raw rig rather than a rectified pair."""
+    paths = [Path(p) for p in paths]
+    if len(paths) == 2:
+        return True
+    text = _read(paths[0])
+    return text.lstrip().startswith(("%YAML", "<?xml", "<opencv_storage")) or (
+        "cam0:" in text and "cam1:" in text) or "camera_matrix" in text
+
+
+def read_rig(paths) -> RawRig:
+    """The raw rig of one OpenCV or Kalibr file, or of a left and a right ROS file."""
+    paths = [Path(p) for p in paths]
+    if len(paths) == 2:
+        return _ros_pair(*paths)
+    if len(paths) != 1:
+        raise CalibrationError("--calib takes one rig file, or a left and a right ROS "
+                               "camera_info file")
+    path = paths[0]
+    text = _read(path)
+    if text.lstrip().startswith(("%YAML", "<?xml", "<opencv_storage")):
+        return _opencv(path)
+    data = _yaml(path, text)
+    if isinstance(data, dict) and "cam0" in data and "cam1" in data:
+        return _kalibr(path, data)
+    if isinstance(data, dict) and "camera_matrix" in data:
+        raise CalibrationError(f"{path}: a ROS camera_info file describes one camera; give "
+                               "the left and the right one (--calib left.yaml --calib "
+                               "right.yaml)")
+    raise CalibrationError(f"{path}: not an OpenCV, ROS or Kalibr stereo calibration")
+
+
+def _read(path: Path) -> str:
+    try:
+        if path.stat().st_size > MAX_CALIBRATION_BYTES:
+            raise CalibrationError(f"{path}: larger than any calibration file")
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise CalibrationError(f"{path}: file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CalibrationError(f"{path}: cannot read the calibration ({exc})") from None
+
+
+def _yaml(path: Path, text: str):
+    try:
+        return yaml.safe_load(text)
+    except (yaml.YAMLError, RecursionError):
+        raise CalibrationError(f"{path}: not valid YAML") from None
+
+
+def _matrix(path: Path, key: str, value, shape: tuple[int, ...]) -> np.ndarray:
+    """``value`` as a finite float64 array of ``shape`` (sizes may match in total)."""
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise CalibrationError(f"{path}: {key} is not a matrix of numbers") from None
+    if array.size != math.prod(shape):
+        raise CalibrationError(f"{path}: {key} must have {math.prod(shape)} numbers, "
+                               f"has {array.size}")
+    if not np.all(np.isfinite(array)):
+        raise CalibrationError(f"{path}: {key} holds a number that is not finite")
+    return np.ascontiguousarray(array.reshape(shape))
+
+
+def _first_node(storage, path: Path, names: tuple[str, ...], required: bool = True):
+    for name in names:
+        node = storage.getNode(name)
+        if not node.empty():
+            return name, node
+    if required:
+        raise CalibrationError(f"{path}: missing {' / '.join(names)}")
+    return None, None
+
+
+def _opencv(path: Path) -> RawRig:
+    try:
+        storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    except cv2.error:
+        raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file") from None
+    if not storage.isOpened():
+        raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file")
+    try:
+        values = {}
+        for key, names, shape in (("K1", ("K1", "M1", "cameraMatrix1"), (3, 3)),
+                                  ("K2", ("K2", "M2", "cameraMatrix2"), (3, 3)),
+                                  ("R", ("R",), (3, 3)), ("T", ("T",), (3,))):
+            name, node = _first_node(storage, path, names)
+            values[key] = _matrix(path, name, node.mat(), shape)
+        for key, names in (("D1", ("D1", "distCoeffs1")), ("D2", ("D2", "distCoeffs2"))):
+            name, node = _first_node(storage, path, names, required=False)
+            values[key] = np.zeros(5) if node is None else _matrix(
+                path, name, node.mat(), (node.mat().size,))
+        size = None
+        width, height = storage.getNode("image_width"), storage.getNode("image_height")
+        if not width.empty() and not height.empty():
+            size = (int(width.real()), int(height.real()))
+        elif not storage.getNode("imageSize").empty():
+            node = storage.getNode("imageSize")
+            pair = node.mat() if node.isSeq() is False else [node.at(i).real() for i in
+                                                              range(node.size())]
+            size = tuple(int(v) for v in np.asarray(pair).ravel()[:2])
+    finally:
+        storage.release()
+    return RawRig(size=_checked_size(path, size), **values)
+
+
+def _checked_size(path: Path, size) -> tuple[int, int] | None:
+    if size is not None and (len(size) != 2 or min(size) < 1):
+        raise CalibrationError(f"{path}: the image size {size} is not width, height")
+    return None if size is None else (int(size[0]), int(size[1]))
+
+
+def _ros_pair(left: Path, right: Path) -> RawRig:
+    cams = []
+    for path in (left, right):
+        data = _yaml(path, _read(path))
+        if not isinstance(data, dict) or "camera_matrix" not in data:
+            raise CalibrationError(f"{path}: not a ROS camera_info file (camera_matrix ...)")
+        try:
+            matrices = {key: _matrix(path, key, data[key]["data"], shape)
+                        for key, shape in (("camera_matrix", (3, 3)),
+                                           ("rectification_matrix", (3, 3)),
+                                           ("projection_matrix", (3, 4)))}
+            coeffs = data.get("distortion_coefficients", {"data": [0, 0, 0, 0, 0]})["data"]
+            matrices["distortion"] = _matrix(path, "distortion_coefficients", coeffs,
+                                             (len(coeffs),))
+            size = (int(data["image_width"]), int(data["image_height"]))
+        except (KeyError, TypeError) as exc:
+            raise CalibrationError(f"{path}: missing {exc}") from None
+        model = "fisheye" if data.get("distortion_model") == "equidistant" else "pinhole"
+        cams.append((matrices, size, model))
+    (l, size, model), (r, _, _) = cams
+    # The pose of the right camera from the rectifications: X2 = R2^T R1 X1 + T with the
+    # baseline along the rectified x axis, Tx = -fx' B in P2.
+    rotation = r["rectification_matrix"].T @ l["rectification_matrix"]
+    baseline = -r["projection_matrix"][0, 3] / r["projection_matrix"][0, 0]
+    translation = r["rectification_matrix"].T @ np.array([-baseline, 0.0, 0.0])
+    return RawRig(K1=l["camera_matrix"], D1=l["distortion"], K2=r["camera_matrix"],
+                  D2=r["distortion"], R=rotation, T=translation, size=size, model=model,
+                  rectify=(l["rectification_matrix"], r["rectification_matrix"]),
+                  project=(l["projection_matrix"], r["projection_matrix"]))
+
+
+def _kalibr(path: Path, data: dict) -> RawRig:
+    cams = []
+    for name in ("cam0", "cam1"):
+        cam = data[name]
+        try:
+            fu, fv, pu, pv = (float(v) for v in cam["intrinsics"])
+            coeffs = [float(v) for v in cam["distortion_coeffs"]]
+            model = cam.get("distortion_model", "radtan")
+            size = tuple(int(v) for v in cam["resolution"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise CalibrationError(f"{path}: {name} lacks a valid {exc}") from None
+        if cam.get("camera_model", "pinhole") != "pinhole":
+            raise CalibrationError(f"{path}: {name}: camera_model "
+                                   f"{cam.get('camera_model')} is not supported (pinhole)")
+        if model not in ("radtan", "equidistant"):
+            raise CalibrationError(f"{path}: {name}: distortion_model {model} is not "
+                                   "supported (radtan, equidistant)")
+        K = _matrix(path, f"{name}.intrinsics", [[fu, 0, pu], [0, fv, pv], [0, 0, 1]], (3, 3))
+        D = _matrix(path, f"{name}.distortion_coeffs", coeffs, (len(coeffs),))
+        cams.append((K, D, model, size))
+    try:
+        pose = _matrix(path, "cam1.T_cn_cnm1", data["cam1"]["T_cn_cnm1"], (4, 4))
+    except KeyError:
+        raise CalibrationError(f"{path}: cam1 lacks T_cn_cnm1") from None
+    (K1, D1, model, size), (K2, D2, _, _) = cams
+    if model == "radtan":  # Kalibr: k1 k2 p1 p2, as OpenCV's first four
+        D1, D2 = (np.concatenate([d, np.zeros(max(0, 5 - d.size))]) for d in (D1, D2))
+    return RawRig(K1=K1, D1=D1, K2=K2, D2=D2, R=pose[:3, :3].copy(), T=pose[:3, 3].copy(),
+                  size=size,
+                  model="fisheye" if model == "equidistant" else "pinhole")
+
+
+class Rectifier:
+    """The rectification of a raw rig, computed once for an image size and reused.
+
+    ``alpha`` as OpenCV's: 0 keeps only valid pixels (default), 1 keeps every source pixel.
+    """
+
+    def __init__(self, rig: RawRig, size: tuple[int, int], alpha: float = 0.0):
+        if rig.size is not None and tuple(rig.size) != tuple(size):
+            raise CalibrationError(f"the calibration is for {rig.size[0]}x{rig.size[1]} "
+                                   f"images, these are {size[0]}x{size[1]}")
+        self.size = size
+        if rig.rectify is not None and rig.project is not None:
+            r1, r2 = rig.rectify
+            p1, p2 = rig.project
+        elif rig.model == "fisheye":
+            r1, r2, p1, p2, _ = cv2.fisheye.stereoRectify(
+                rig.K1, rig.D1[:4], rig.K2, rig.D2[:4], size, rig.R, rig.T.reshape(3, 1),
+                flags=0, newImageSize=size, balance=alpha)
+        else:
+            r1, r2, p1, p2, *_ = cv2.stereoRectify(
+                rig.K1, rig.D1, rig.K2, rig.D2, size, rig.R, rig.T.reshape(3, 1),
+                flags=0, alpha=alpha)
+        self.rotations, self.projections = (r1, r2), (p1, p2)
+        make = (cv2.fisheye.initUndistortRectifyMap if rig.model == "fisheye"
+                else cv2.initUndistortRectifyMap)
+        self.maps = [make(K, D[:4] if rig.model == "fisheye" else D, Rr, P, size,
+                          cv2.CV_32FC1)
+                     for K, D, Rr, P in ((rig.K1, rig.D1, r1, p1), (rig.K2, rig.D2, r2, p2))]
+
+    def rectify(self, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Both views rectified (same size and type as given)."""
+        if left.shape[1::-1] != tuple(self.size):
+            raise CalibrationError(f"images of {left.shape[1]}x{left.shape[0]} do not match "
+                                   f"the rig's {self.size[0]}x{self.size[1]}")
+        return tuple(cv2.remap(view, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+                     for view, (mx, my) in zip((left, right), self.maps))
+
+    def calibration(self) -> Calibration:
+        """The rectified rig: f, principal points and the baseline, in the calibration's
+        units (the translation's)."""
+        p1, p2 = self.projections
+        focal = float(p1[0, 0])
+        baseline = -float(p2[0, 3]) / float(p2[0, 0])
+        if not baseline > 0:
+            raise CalibrationError("the right camera is not to the right of the left one "
+                                   f"after rectification (baseline {baseline:g}); are the "
+                                   "cameras swapped?")
+        return Calibration(focal=focal, baseline=baseline, cx=float(p1[0, 2]),
+                           cy=float(p1[1, 2]), doffs=float(p2[0, 2] - p1[0, 2]),
+                           focal_y=float(p1[1, 1]))
+
+
+def middlebury_calib_text(calib: Calibration, size: tuple[int, int], ndisp: int | None
+                          ) -> str:
+    """A Middlebury-style ``calib.txt`` that ``vsmatch run --calib`` reads."""
+    cx, cy = calib.principal_point((size[1], size[0]))
+    fy = calib.focal_y or calib.focal
+    lines = [f"cam0=[{calib.focal:.6f} 0 {cx:.6f}; 0 {fy:.6f} {cy:.6f}; 0 0 1]",
+             f"cam1=[{calib.focal:.6f} 0 {cx + calib.doffs:.6f}; 0 {fy:.6f} {cy:.6f}; 0 0 1]",
+             f"doffs={calib.doffs:.6f}", f"baseline={calib.baseline:.6f}",
+             f"width={size[0]}", f"height={size[1]}"]
+    if ndisp is not None:
+        lines.append(f"ndisp={ndisp}")
+    return "\n".join(lines) + "\n"
