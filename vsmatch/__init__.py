@@ -6,11 +6,13 @@ Wang, Pathan and Dev, "Stereo Matching Based on Visual Sensitive Information", I
 from .config import Config, ConfigError, load_config
 from .disparity import INVALID_DISPARITY
 from .geometry import Calibration, depth_from_disparity, point_cloud, read_calibration
+from .matcher import StereoMatcher
 from .pipeline import match
 from .search_range import estimate_disparity_range
 
 __version__ = "0.1.0"
 
-__all__ = ["Calibration", "Config", "ConfigError", "INVALID_DISPARITY", "__version__",
+__all__ = ["Calibration", "Config", "ConfigError", "INVALID_DISPARITY", "StereoMatcher",
+           "__version__",
            "depth_from_disparity", "estimate_disparity_range", "load_config", "match",
            "point_cloud", "read_calibration"]

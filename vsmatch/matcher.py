@@ -1,0 +1,95 @@
+"""A matcher made once for many frames of one camera: video, a robot's stream.
+
+:class:`StereoMatcher` keeps what does not change between frames: the parsed config, a
+raw rig's rectification maps, and the disparity range found from the first frame (found
+again when the scene comes closer than it allows). Each frame's result is the same as
+:func:`vsmatch.match` gives for that frame and range.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from . import pipeline, rig
+from .config import Config, load_config
+from .geometry import Calibration, read_calibration
+from .search_range import estimate_disparity_range
+
+#: The range is found again when more than this share of a frame's confident pixels
+#: lies within TOP_MARGIN of its top: something came closer than the range allows.
+CROWDED_TOP_SHARE = 0.005
+TOP_MARGIN = 2.0
+#: Confidence above which a pixel counts for that.
+CONFIDENT = 0.5
+
+
+class StereoMatcher:
+    """``StereoMatcher(max_disp=None, min_disp=0, config=None, calib=None)``.
+
+    ``max_disp`` None finds the range from the first frame (and again when needed);
+    ``calib`` is a rectified pair's calibration (a path or a :class:`Calibration`), or a
+    raw rig's file(s), whose rectification is then applied to every frame. ``compute``
+    gives the disparity, :meth:`result` everything (confidence, timings, range).
+    """
+
+    def __init__(self, max_disp: int | None = None, min_disp: int | None = None,
+                 config: Config | str | None = None, calib=None, alpha: float = 0.0):
+        self.config = load_config(config)
+        self.fixed_range = max_disp is not None
+        self.range = None if max_disp is None else (min_disp or 0, max_disp)
+        self.camera: Calibration | None = None
+        self._raw_rig = None
+        self._rectifier = None
+        self._alpha = alpha
+        paths = [calib] if isinstance(calib, (str, Path)) else calib
+        if isinstance(calib, Calibration):
+            self.camera = calib
+        elif paths:
+            if rig.is_raw_rig(paths):
+                self._raw_rig = rig.read_rig(paths)
+            else:
+                self.camera = read_calibration(paths[0])
+        self.frames = 0
+
+    def rectify(self, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The views as matched: rectified with the rig's maps (made on the first frame)."""
+        if self._raw_rig is None:
+            return left, right
+        if self._rectifier is None:
+            self._rectifier = rig.Rectifier(self._raw_rig, left.shape[1::-1], self._alpha)
+            self.camera = self._rectifier.calibration()
+        return self._rectifier.rectify(left, right)
+
+    def result(self, left: np.ndarray, right: np.ndarray) -> pipeline.MatchResult:
+        """The whole :class:`vsmatch.pipeline.MatchResult` of one frame."""
+        left, right = self.rectify(left, right)
+        if self.range is None:
+            self.range = self._find_range(left, right)
+        low, high = self.range
+        result = pipeline.run(left, right, max_disp=high, min_disp=low, config=self.config)
+        self.frames += 1
+        if not self.fixed_range and self._top_is_crowded(result, high):
+            self.range = None  # the next frame looks for it again
+        return result
+
+    def compute(self, left: np.ndarray, right: np.ndarray) -> np.ndarray:
+        """The left-view disparity of one frame (float32, inf = invalid)."""
+        return self.result(left, right).disparity
+
+    def _find_range(self, left, right) -> tuple[int, int]:
+        """The calibration's ndisp when it gives a real one, else the pair's range."""
+        ndisp = None if self.camera is None else self.camera.search_range_for(left.shape[1])
+        if ndisp is not None:
+            return 0, ndisp - 1
+        found = estimate_disparity_range(left, right)
+        return found.min_disp, max(found.max_disp, found.min_disp + 1)
+
+    @staticmethod
+    def _top_is_crowded(result: pipeline.MatchResult, high: int) -> bool:
+        confident = result.confidence >= CONFIDENT
+        if not confident.any():
+            return False
+        near_top = confident & (result.disparity >= high - TOP_MARGIN)
+        return near_top.sum() > CROWDED_TOP_SHARE * confident.sum()
