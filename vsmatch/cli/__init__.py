@@ -7,7 +7,8 @@ stderr, no traceback, no output file left behind), or an unexpected error (one l
 argument); 130 interrupted (Ctrl-C); 143 terminated (SIGTERM).
 """
 
-from . import batch, bench, datasets, demo, eval, rectify, run  # noqa: F401 - registers them
+from . import (batch, bench, datasets, demo, eval, rectify, run,  # noqa: F401 - registers
+               video)
 from .main import main
 
 __all__ = ["main"]

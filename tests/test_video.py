@@ -1,0 +1,79 @@
+"""vsmatch video (issue 20): frames of two videos, or one side by side, through one matcher."""
+
+import cv2
+import numpy as np
+from click.testing import CliRunner
+
+from vsmatch import io
+from vsmatch.cli import main
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def write_videos(folder, rng, frames=4, shift=6, size=(128, 64)):
+    """left.avi, right.avi and both.avi (side by side) of a textured scene drifting."""
+    width, height = size
+    base = rng.integers(0, 256, (height // 4 + 1, (width + shift + 2 * frames) // 4 + 2, 3),
+                        np.uint8)
+    wide = cv2.resize(base, (base.shape[1] * 4, base.shape[0] * 4),
+                      interpolation=cv2.INTER_CUBIC)[:height]
+    fourcc = cv2.VideoWriter_fourcc(*"MJPG")
+    writers = {name: cv2.VideoWriter(str(folder / f"{name}.avi"), fourcc, 10,
+                                     (width * (2 if name == "both" else 1), height))
+               for name in ("left", "right", "both")}
+    for k in range(frames):
+        left = np.ascontiguousarray(wide[:, 2 * k:2 * k + width])
+        right = np.ascontiguousarray(wide[:, 2 * k + shift:2 * k + shift + width])
+        writers["left"].write(left)
+        writers["right"].write(right)
+        writers["both"].write(np.hstack([left, right]))
+    for writer in writers.values():
+        writer.release()
+
+
+def frame_count(path):
+    capture = cv2.VideoCapture(str(path))
+    count = 0
+    while capture.read()[0]:
+        count += 1
+    return count
+
+
+def test_two_videos_give_a_disparity_video_and_frames(tmp_path, rng):
+    write_videos(tmp_path, rng)
+    result = invoke("-v", "video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
+                    tmp_path / "d.avi", "--max-disp", 16, "--frames", tmp_path / "frames",
+                    "--config", "paper")
+    assert result.exit_code == 0, result.output
+    assert "4 frames" in result.output and "fps" in result.output
+    assert frame_count(tmp_path / "d.avi") == 4
+    disp = io.read_pfm(tmp_path / "frames" / "000003.pfm")
+    assert np.mean(np.abs(disp[8:-8, 24:-8] - 6) < 1) > 0.8
+    assert (tmp_path / "frames" / "000003_confidence.pfm").exists()
+    assert not [p for p in tmp_path.iterdir() if ".partial" in p.name]
+
+
+def test_side_by_side_gives_the_same_frames(tmp_path, rng):
+    write_videos(tmp_path, rng)
+    args = ["--max-disp", 16, "--config", "paper", "--max-frames", 2]
+    assert invoke("video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
+                  tmp_path / "a.avi", "--frames", tmp_path / "a", *args).exit_code == 0
+    result = invoke("video", tmp_path / "both.avi", "--side-by-side", "-o",
+                    tmp_path / "b.avi", "--frames", tmp_path / "b", *args)
+    assert result.exit_code == 0, result.output
+    assert frame_count(tmp_path / "b.avi") == 2
+    # Both were compressed alike but not identically: the disparities agree where sure.
+    a, b = (io.read_pfm(tmp_path / f / "000001.pfm") for f in ("a", "b"))
+    assert np.mean(np.abs(a - b)[8:-8, 24:-8] < 1) > 0.9
+
+
+def test_video_errors_are_one_line(tmp_path):
+    result = invoke("video", tmp_path / "missing.avi", tmp_path / "other.avi", "-o",
+                    tmp_path / "d.avi")
+    assert result.exit_code == 1 and "cannot open this video" in result.output
+    assert invoke("video", tmp_path / "a.avi", "-o", tmp_path / "d.avi").exit_code == 2
+    result = invoke("video", tmp_path / "a.avi", tmp_path / "b.avi", "-o", tmp_path / "d.gif")
+    assert result.exit_code == 2 and ".avi or .mp4" in result.output
+    assert not (tmp_path / "d.avi").exists()
