@@ -106,13 +106,13 @@ def row_offset(left, right):
 
 
 @pytest.mark.data
-@pytest.mark.parametrize("form", ["opencv", "kalibr", "ros"])
+@pytest.mark.parametrize("form", ["opencv", "opencv-xml", "kalibr", "ros"])
 def test_each_format_rectifies_the_raw_pair(scene, tmp_path, form):
     found, calib = scene
     (left, right), m = raw_views(found, calib)
     assert row_offset(left, right) > 5  # the raw views' rows disagree
-    if form == "opencv":
-        paths = [tmp_path / "stereo.yaml"]
+    if form.startswith("opencv"):
+        paths = [tmp_path / ("stereo.xml" if form.endswith("xml") else "stereo.yaml")]
         write_opencv(paths[0], m)
     elif form == "kalibr":
         paths = [tmp_path / "camchain.yaml"]
