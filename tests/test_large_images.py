@@ -6,7 +6,6 @@ import pytest
 from click.testing import CliRunner
 
 from vsmatch import cost, datasets, metrics, pipeline, pyramid, sensitivity
-from vsmatch._kernels.band import search_band
 from vsmatch.aggregation import cross_arms
 from vsmatch.bench import upscaled_scene
 from vsmatch.cli import main
@@ -97,7 +96,7 @@ def test_refine_blocks_do_not_change_the_result(teddy, monkeypatch):
     coarse = pipeline.run(pyramid.downsample(s.left), pyramid.downsample(s.right),
                           max_disp=coarse_max, config=cfg)
     whole = pyramid.refine(s.left, s.right, coarse.disparity, coarse.labels, s.max_disp, cfg)
-    monkeypatch.setattr(pyramid, "REFINE_ROWS", 3 * pyramid.TILE)
+    monkeypatch.setattr(pyramid, "REFINE_ROWS", 50)
     blocks = pyramid.refine(s.left, s.right, coarse.disparity, coarse.labels, s.max_disp, cfg)
     assert np.isfinite(whole).all()
     assert whole.tobytes() == blocks.tobytes()
@@ -139,9 +138,9 @@ def test_band_search_equals_cross_sums_of_the_cost_volume(rng):
     arms = cross_arms(left, theta_l, grad_l, arms_cfg)
     lo = rng.integers(0, n_disp, size=(37, 45)).astype(np.int32)
     hi = np.minimum(lo + rng.integers(-1, 6, size=(37, 45)), n_disp - 1).astype(np.int32)
-    out = np.empty((37, 45), np.float32)
-    search_band(*cost.cost_terms(left, right, census_l, census_r, grad_l, grad_r, cfg.cost),
-                arms, lo, hi, n_disp, 5, 16, True, out)
+    out = pyramid.search_in_bands(
+        cost.cost_terms(left, right, census_l, census_r, grad_l, grad_r, cfg.cost), arms, lo,
+        hi, n_disp, 5, True)
     expected = _band_search_by_hand(volume, arms, lo, hi)
     assert np.array_equal(np.isinf(out), lo > hi)
     both = lo <= hi

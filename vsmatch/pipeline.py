@@ -73,7 +73,8 @@ def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
 
 def full_search_size(width: int, max_disp: int, cfg: Config) -> tuple[int, int]:
     """Width and disparity count of the pyramid level where the full search runs."""
-    for _ in range(pyramid.coarse_levels(width, max_disp + 1, cfg.pyramid.max_row_cells)):
+    for _ in range(pyramid.coarse_levels(width, max_disp + 1, cfg.pyramid.max_row_cells,
+                                          cfg.pyramid.min_levels)):
         width, max_disp = pyramid.level_down(width, max_disp)
     return width, max_disp + 1
 
@@ -158,7 +159,8 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
     if cfg.photometric.enabled:
         with _stage(seconds, "photometric"):
             right, cfg, correction = _correct_exposure(left, right, max_disp, cfg)
-    levels = pyramid.coarse_levels(left.shape[1], max_disp + 1, cfg.pyramid.max_row_cells)
+    levels = pyramid.coarse_levels(left.shape[1], max_disp + 1, cfg.pyramid.max_row_cells,
+                                   cfg.pyramid.min_levels)
     result = _coarse_to_fine(left, right, max_disp, cfg, levels)
     result.seconds = {**seconds, **result.seconds}
     result.photometric = correction

@@ -20,23 +20,23 @@ import cv2
 import numpy as np
 
 from . import aggregation, cost, noise, sensitivity
-from ._kernels.band import search_band
+from ._kernels.band import band_costs, search_band
 from .config import Config
 from .disparity import VALID
 from .images import to_grey
 
-#: Rows refined at a time at a fine level, a multiple of TILE. The result does not depend
-#: on it (every pixel reads only its cross, inside the margin); it bounds the memory of
-#: the per-pixel arrays.
+#: Rows refined at a time at a fine level. The result does not depend on it (every pixel
+#: reads only its cross, inside the margin); it bounds the memory of the per-pixel arrays.
 REFINE_ROWS = 256
-#: Side of the square tiles whose costs are computed together (see ``search_band``).
-TILE = 16
 
 
-def coarse_levels(width: int, n_disp: int, max_row_cells: int) -> int:
-    """How many times to halve a pair before the full search."""
+def coarse_levels(width: int, n_disp: int, max_row_cells: int, min_levels: int = 0) -> int:
+    """How many times to halve a pair before the full search: while a row holds more
+    than ``max_row_cells`` cells, and at least ``min_levels`` times (the ``fast`` config's
+    coarse-to-fine at every size), never below 64 columns or 16 disparities."""
     levels = 0
-    while width * n_disp > max_row_cells and width >= 64 and n_disp >= 16:
+    while ((width * n_disp > max_row_cells or levels < min_levels) and width >= 64
+           and n_disp >= 16):
         width, max_disp = level_down(width, n_disp - 1)
         n_disp = max_disp + 1
         levels += 1
@@ -123,10 +123,7 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
     out = np.empty((height, width), dtype=np.float32)
     for top in range(0, height, REFINE_ROWS):
         bottom = min(height, top + REFINE_ROWS)
-        # Blocks start on the tile grid, so every tile sums in the same order as in one
-        # piece (REFINE_ROWS is a multiple of TILE).
         y0, y1 = max(0, top - margin), min(height, bottom + margin)
-        y0 -= y0 % TILE
         views = left[y0:y1], right[y0:y1]
         grey = [to_grey(v) for v in views]
         grads = [sensitivity.visual_sensitivity(g) for g in grey]
@@ -140,8 +137,34 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
                                           cfg.pyramid.band)
         for rows in (slice(0, top - y0), slice(bottom - y0, None)):
             lo_block[rows], hi_block[rows] = 1, 0
-        block = np.empty((y1 - y0, left.shape[1]), dtype=np.float32)
-        search_band(*terms, arms, lo_block, hi_block, int(max_disp) + 1, support, TILE,
-                    bool(cfg.subpixel.enabled), block)
+        block = search_in_bands(terms, arms, lo_block, hi_block, int(max_disp) + 1, support,
+                                bool(cfg.subpixel.enabled))
         out[top:bottom] = block[top - y0:bottom - y0]
+    return out
+
+
+def search_in_bands(terms: tuple, arms: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                    n_disp: int, support: int, subpixel: bool) -> np.ndarray:
+    """Each pixel's best disparity in ``lo .. hi`` (float32, inf where ``lo > hi``), its
+    candidates' costs summed over its cross (arms of at most ``support`` pixels).
+
+    ``terms`` are :func:`vsmatch.cost.cost_terms`' for the views. A pixel's matching costs
+    are computed once, for just the disparities the crosses that hold it ask for: the
+    bands (each widened by one, for the parabola) within ``support`` pixels along its row
+    and its column.
+    """
+    has_band = lo <= hi
+    first = np.where(has_band, np.maximum(lo - 1, 0), n_disp).astype(np.float32)
+    last = np.where(has_band, np.minimum(hi + 1, n_disp - 1), -1).astype(np.float32)
+    across = np.ones((1, 2 * support + 1), np.uint8)
+    along = np.ones((2 * support + 1, 1), np.uint8)
+    # Outside the image erode sees +inf and dilate -inf (OpenCV's morphology borders).
+    need_lo = np.minimum(cv2.erode(first, across), cv2.erode(first, along)).astype(np.int32)
+    need_hi = np.maximum(cv2.dilate(last, across), cv2.dilate(last, along)).astype(np.int32)
+    sizes = np.maximum(need_hi - need_lo + 1, 0).astype(np.int64)
+    offsets = (np.cumsum(sizes) - sizes.ravel()).reshape(sizes.shape)
+    store = np.empty(int(sizes.sum()), dtype=np.float32)
+    band_costs(*terms, need_lo, need_hi, offsets, store)
+    out = np.empty(lo.shape, dtype=np.float32)
+    search_band(store, offsets, need_lo, arms, lo, hi, n_disp, subpixel, out)
     return out
