@@ -10,16 +10,21 @@ from .config import ArmsConfig
 from .images import as_channels, colour_change, mirrored
 
 
-def cross_arms(image: np.ndarray, theta: np.ndarray, sensitivity: np.ndarray,
+def cross_arms(image: np.ndarray, theta: np.ndarray | None, sensitivity: np.ndarray,
                cfg: ArmsConfig) -> np.ndarray:
     """Arm lengths ``(4, H, W)`` uint8 in the order left, right, up, down.
 
     ``image`` is the colour (or grey) image the colour distances are measured on;
-    ``theta`` and ``sensitivity`` are the direction and magnitude of its gradient.
+    ``theta`` and ``sensitivity`` are the direction and magnitude of its gradient
+    (``theta`` may be None when ``cfg.kappa`` is 0: the arms then ignore it).
     """
     image = as_channels(image)
     strength = np.minimum(1.0, sensitivity / cfg.g_sat).astype(np.float32)
-    out = np.empty((4,) + theta.shape, dtype=np.uint8)  # l2 <= 255 (config range)
+    if theta is None:
+        if cfg.kappa != 0:
+            raise ValueError("direction-guided arms (kappa != 0) need the gradient direction")
+        theta = np.zeros(strength.shape, np.float32)  # read only where kappa != 0
+    out = np.empty((4,) + strength.shape, dtype=np.uint8)  # l2 <= 255 (config range)
     _cross_arms_kernel(image, np.ascontiguousarray(theta, dtype=np.float32), strength,
                        colour_change(image, cfg.tau2, along_rows=True),
                        colour_change(image, cfg.tau2, along_rows=False),

@@ -206,7 +206,8 @@ def _first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
     takes all in both views, the exact left-right check. Returns the left disparity and
     the pixels that pass the check."""
     volume, _, _ = _matching_costs(left, right, max_disp + 1,
-                                   dataclasses.replace(cfg.cost, lambda_ad=None))
+                                   dataclasses.replace(cfg.cost, lambda_ad=None),
+                                   direction=False)
     box = (cfg.photometric.box, cfg.photometric.box)
     step = BLUR_MAX_CHANNELS
     for first in range(0, volume.shape[2], step):
@@ -217,14 +218,13 @@ def _first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
     return disp_l, labels == disparity.VALID
 
 
-def _matching_costs(left: np.ndarray, right: np.ndarray, n_disp: int, cost_cfg: CostConfig
-                    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray],
-                               tuple[np.ndarray, np.ndarray]]:
+def _matching_costs(left: np.ndarray, right: np.ndarray, n_disp: int, cost_cfg: CostConfig,
+                    direction: bool = True) -> tuple[np.ndarray, tuple, tuple]:
     """The cost volume (ALGORITHM.md §1-2) and each view's gradient magnitude and
-    direction, which the arms need too."""
+    direction (None unless ``direction``), which the arms need too."""
     grey_l, grey_r = to_grey(left), to_grey(right)
-    sens_l = sensitivity.visual_sensitivity(grey_l)
-    sens_r = sensitivity.visual_sensitivity(grey_r)
+    sens_l = sensitivity.visual_sensitivity(grey_l, direction)
+    sens_r = sensitivity.visual_sensitivity(grey_r, direction)
     volume = cost.cost_volume(left, right, cost.census_for(grey_l, cost_cfg),
                               cost.census_for(grey_r, cost_cfg), sens_l[0], sens_r[0],
                               n_disp=n_disp, cfg=cost_cfg)
@@ -347,8 +347,8 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
             right = sensitivity.presmooth(right, cfg.cost.presmooth_sigma)
 
     with stage("cost"):
-        volume, (grad_l, theta_l), (grad_r, theta_r) = _matching_costs(left, right, n_disp,
-                                                                       cfg.cost)
+        volume, (grad_l, theta_l), (grad_r, theta_r) = _matching_costs(
+            left, right, n_disp, cfg.cost, direction=cfg.arms.kappa != 0)
 
     arms_l = arms_r = None
     if cfg.aggregation.iterations > 0 or cfg.voting.enabled:

@@ -56,9 +56,14 @@ def downsample(image: np.ndarray) -> np.ndarray:
 
 
 def upsample_nearest(array: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """Each fine pixel (y, x) takes coarse pixel (y // 2, x // 2)."""
+    """Each fine pixel (y, x) takes coarse pixel (y // 2, x // 2) (the last coarse row
+    and column where the fine size is odd beyond them)."""
     rows = np.minimum(np.arange(shape[0]) // 2, array.shape[0] - 1)
     cols = np.minimum(np.arange(shape[1]) // 2, array.shape[1] - 1)
+    if rows[-1] == (shape[0] - 1) // 2 and cols[-1] == (shape[1] - 1) // 2:
+        # The usual case, every index y // 2: repeating is several times faster.
+        return np.ascontiguousarray(
+            np.repeat(np.repeat(array, 2, axis=0)[:shape[0]], 2, axis=1)[:, :shape[1]])
     return array[rows[:, None], cols[None, :]]
 
 
@@ -126,7 +131,7 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
         y0, y1 = max(0, top - margin), min(height, bottom + margin)
         views = left[y0:y1], right[y0:y1]
         grey = [to_grey(v) for v in views]
-        grads = [sensitivity.visual_sensitivity(g) for g in grey]
+        grads = [sensitivity.visual_sensitivity(g, arms_cfg.kappa != 0) for g in grey]
         census = [cost.census_for(g, cfg.cost) for g in grey]
         # Arms on the block; the margin keeps them from reaching its edge for the core rows.
         arms = aggregation.cross_arms(views[0], grads[0][1], grads[0][0], arms_cfg)

@@ -14,13 +14,17 @@ def presmooth(image: np.ndarray, sigma: float) -> np.ndarray:
                             borderType=cv2.BORDER_REFLECT_101)
 
 
-def visual_sensitivity(grey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def visual_sensitivity(grey: np.ndarray, direction: bool = True
+                       ) -> tuple[np.ndarray, np.ndarray | None]:
     """Return ``(G, theta)``, both float32 (H, W).
 
     ``G = sqrt(Gx^2 + Gy^2)`` with the 3x3 Sobel templates, and ``theta = atan2(Gy, Gx)``,
-    the direction of fastest grey change (atan2 keeps the quadrant).
+    the direction of fastest grey change (atan2 keeps the quadrant). ``direction=False``
+    gives None for theta: only direction-guided arms (``arms.kappa`` != 0) read it, and
+    atan2 costs ten times the rest.
     """
     grey = np.ascontiguousarray(grey, dtype=np.float32)
     gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT_101)
     gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT_101)
-    return np.sqrt(gx * gx + gy * gy), np.arctan2(gy, gx).astype(np.float32)
+    theta = np.arctan2(gy, gx).astype(np.float32) if direction else None
+    return np.sqrt(gx * gx + gy * gy), theta

@@ -74,7 +74,7 @@ def cross_arms(image, theta, strength, breaks_h, breaks_v, tau1, tau3, l1, l2, k
     from the previous pixel along the row, along the column. ``shrink``: the colour
     threshold falls linearly to 0 at l2 pixels (the authors' published code).
     """
-    height, width = theta.shape
+    height, width = strength.shape
     shrink_over = float(l2) if shrink else 0.0
     for y in prange(height):
         for x in range(width):
