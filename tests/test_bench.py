@@ -5,21 +5,42 @@ import subprocess
 import sys
 
 import cv2
+import numpy as np
 import pytest
 
 from vsmatch import bench, synthetic
 from vsmatch.datasets import Scene
+from vsmatch.evaluation import Scoring
 
 
-def test_time_pairs_reports_both_matchers_per_scene():
+def _synthetic_report(configs):
     pair = synthetic.make_pair(width=96, height=64)
     scene = Scene("synthetic", pair.left, pair.right, pair.disparity,
-                  {"nonocc": pair.nonocc}, 40)
-    result = bench.time_pairs([scene], "paper", repeats=1)
+                  {"nonocc": pair.nonocc, "all": pair.nonocc}, 40)
+    return bench.time_pairs([(scene, Scoring.bad(1.0))], configs, rounds=1)
+
+
+def test_time_pairs_reports_each_config_and_sgbm_mode_per_scene():
+    result = _synthetic_report(["paper", "fast"])
+    assert result["methods"] == ["paper", "fast", "sgbm-5", "sgbm-hh", "sgbm-3way"]
     timing = result["scenes"]["synthetic"]
-    assert timing["vsmatch"] > 0 and timing["sgbm"] > 0
-    assert {"cost", "aggregation", "wta"} <= set(timing["stages"])
-    assert result["total"]["ratio"] == timing["vsmatch"] / timing["sgbm"]
+    assert all(timing[m]["seconds"] > 0 for m in result["methods"])
+    assert {"cost", "aggregation", "wta"} <= set(timing["paper"]["stages"])
+    assert "refine" in timing["fast"]["stages"]  # fast searches a band at full size
+    total = result["total"]
+    assert total["paper"]["x_sgbm-hh"] == timing["paper"]["seconds"] / timing["sgbm-hh"][
+        "seconds"]
+    # The synthetic pair is easy for vsmatch, and SGBM's empty left margin counts as bad.
+    assert total["paper"]["error"] < 5 < total["sgbm-hh"]["error"]
+
+
+def test_the_tradeoff_plot_names_every_method(tmp_path):
+    result = _synthetic_report(["paper"])
+    image = bench.tradeoff_figure({"pairs": result})
+    assert image.ndim == 3 and image.dtype == np.uint8
+    blue = (image[..., 0] > 150) & (image[..., 2] < 50)  # vsmatch's points and names
+    grey = (image[..., 0] == 150) & (image[..., 1] == 150)  # SGBM's
+    assert blue.sum() > 50 and grey.sum() > 150
 
 
 def test_sgbm_range_covers_the_disparities():
@@ -52,6 +73,9 @@ def test_upscaled_scene_scales_views_truth_and_range():
     left, right, gt, mask, max_disp = bench.upscaled_scene(scene, 2)
     assert left.shape == (60, 80, 3) and right.shape == left.shape
     assert max_disp == 25  # 13 levels become 26
+    left, _, gt_half, _, max_disp = bench.upscaled_scene(scene, 2.5)
+    assert left.shape == (75, 100, 3) and max_disp == 32  # 13 levels cover 32.5
+    assert gt_half.max() == pytest.approx(pair.disparity.max() * 2.5)
     np.testing.assert_array_equal(gt[::2, ::2], pair.disparity * 2)
     np.testing.assert_array_equal(mask[1::2, 1::2], pair.nonocc)
 
@@ -59,7 +83,7 @@ def test_upscaled_scene_scales_views_truth_and_range():
 @pytest.mark.data
 def test_size_child_reports_time_memory_and_accuracy(data_dir):
     proc = subprocess.run([sys.executable, "-m", "vsmatch.bench", "size", "--matcher",
-                           "sgbm-5", "--factor", "1", "--data-root", str(data_dir)],
+                           "sgbm-5", "--scale", "1", "--data-root", str(data_dir)],
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     report = json.loads(proc.stdout.splitlines()[-1])
@@ -67,13 +91,22 @@ def test_size_child_reports_time_memory_and_accuracy(data_dir):
     assert report["threshold"] == 2.0 and 5 < report["bad_nonocc"] < 40
     assert report["peak_mb"] >= report["before_match_mb"] > 0 and report["seconds"] > 0
     tall = subprocess.run([sys.executable, "-m", "vsmatch.bench", "size", "--matcher",
-                           "sgbm-5", "--factor", "1", "--tall", "--data-root", str(data_dir)],
+                           "sgbm-5", "--scale", "1", "--tall", "--data-root", str(data_dir)],
                           capture_output=True, text=True)
     assert tall.returncode == 0, tall.stderr
     tall_report = json.loads(tall.stdout.splitlines()[-1])
     assert tall_report["size"] == [718, 992] and tall_report["tall"] is True
     # The lower half is the upper one upside down: the same errors, the same share.
     assert abs(tall_report["bad_nonocc"] - report["bad_nonocc"]) < 1.0
+    label, dataset, scene, scale = bench.SIZE_SERIES[1]
+    kitti = subprocess.run([sys.executable, "-m", "vsmatch.bench", "size", "--matcher",
+                            "sgbm-5", "--dataset", dataset, "--scene", scene, "--scale",
+                            str(scale), "--data-root", str(data_dir)],
+                           capture_output=True, text=True)
+    assert kitti.returncode == 0, kitti.stderr
+    kitti_report = json.loads(kitti.stdout.splitlines()[-1])
+    assert label == "KITTI" and kitti_report["size"] == [1242, 375]
+    assert kitti_report["levels"] == 192 and 5 < kitti_report["bad_nonocc"] < 60
 
 
 def test_a_child_does_not_report_its_parents_memory():

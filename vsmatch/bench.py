@@ -1,15 +1,18 @@
 """Speed and memory of vsmatch against OpenCV's StereoSGBM (EVALUATION.md, "Speed").
 
-Timings of the matching itself come from one process, vsmatch and SGBM alternating on the
-same images after a warm-up call, so the ratio holds on a shared, noisy machine: the
-twelve standard pairs (the four middlebury2 pairs and the eight Middlebury 2014 pairs at
-quarter size, each with its official range). Start-up and memory are measured in child
-processes: a first call with an empty compilation cache, the whole ``vsmatch run`` command
-with a warm cache, the peak resident memory of a pair, and the size series: Adirondack
-(Middlebury 2014) upscaled 1x, 2x and 4x (bicubic; ground truth x factor, nearest), matched
-by vsmatch and by SGBM in its 5-direction and HH modes, with time, peak memory and bad
-(2 x factor) on the non-occluded pixels, and vsmatch on the 4x pair with its upside-down
-copy below it (twice as tall: does memory grow with the height?).
+Timings of the matching itself come from one process, vsmatch's configs and SGBM's modes
+alternating on the same images after a warm-up call, the fastest of the rounds kept, so
+the ratios hold on a shared, noisy machine: the twelve standard pairs (the four
+middlebury2 pairs and the eight Middlebury 2014 pairs at quarter size, each with its
+official range), with each method's error on them (the time-error trade-off,
+``--plot``). Start-up and memory are measured in child processes: a first call with an
+empty compilation cache, the whole ``vsmatch run`` command with a warm cache, the peak
+resident memory of a pair, and the size series: Adirondack (Middlebury 2014) as it is,
+a KITTI 2015 frame with 192 disparities, Adirondack upscaled to 1.5 megapixels and 4x
+(bicubic; ground truth x factor, nearest), matched by each config and by SGBM in its
+5-direction and HH modes, with time, peak memory and bad (2 x factor) on the
+non-occluded pixels, and the first config on the 4x pair with its upside-down copy below
+it (twice as tall: does memory grow with the height?).
 """
 
 from __future__ import annotations
@@ -28,49 +31,97 @@ from typing import Any
 import cv2
 import numpy as np
 
-from . import datasets, pipeline
-from .peers import sgbm_matcher
+from . import datasets, evaluation, pipeline
 from .config import load_config
+from .peers import sgbm_fill_from_left, sgbm_matcher
 
-#: The pairs timed against SGBM HH in one process.
+#: The pairs timed against SGBM in one process.
 STANDARD_DATASETS = ("middlebury2", "middlebury2014-quarter")
-#: The size series: a scene upscaled by each factor, and the matchers run on it.
-SIZE_DATASET, SIZE_SCENE = "middlebury2014-quarter", "Adirondack"
-SIZE_FACTORS = (1, 2, 4)
-SIZE_MATCHERS = ("vsmatch", "sgbm-5", "sgbm-hh")
-SGBM_MODES = {"sgbm-5": cv2.STEREO_SGBM_MODE_SGBM, "sgbm-hh": cv2.STEREO_SGBM_MODE_HH}
+#: The configs ``vsmatch bench`` times unless told.
+BENCH_CONFIGS = ("fast", "default")
+#: SGBM's modes, as the benchmark names them (OpenCV's default is the 5-direction one).
+SGBM_MODES = {"sgbm-5": cv2.STEREO_SGBM_MODE_SGBM, "sgbm-hh": cv2.STEREO_SGBM_MODE_HH,
+              "sgbm-3way": cv2.STEREO_SGBM_MODE_SGBM_3WAY}
+#: The size series: (label, dataset, scene, scale). A scale that is not whole gives the
+#: size asked for: 1.5 megapixels, today's stereo cameras.
+SIZE_SERIES = (("1x", "middlebury2014-quarter", "Adirondack", 1),
+               ("KITTI", "kitti2015", "000000", 1),
+               ("1.5 MP", "middlebury2014-quarter", "Adirondack", 2.05),
+               ("4x", "middlebury2014-quarter", "Adirondack", 4))
+SIZE_PEERS = ("sgbm-5", "sgbm-hh")
 
 
-def time_pairs(scenes, config, repeats: int) -> dict[str, Any]:
-    """Median seconds per scene of vsmatch (with stage times) and SGBM, alternating."""
-    cfg = load_config(config)
+def _sgbm_run(mode: str, scene) -> np.ndarray:
+    """SGBM in ``mode`` on the scene's range, holes filled from the left (EVALUATION.md)."""
+    channels = 1 if scene.left.ndim == 2 else scene.left.shape[2]
+    matcher = sgbm_matcher(scene.max_disp, channels, min_disp=scene.min_disp,
+                           mode=SGBM_MODES[mode])
+    return sgbm_fill_from_left(matcher.compute(scene.left, scene.right), scene.min_disp)
+
+
+def standard_pairs(data_root=None) -> list[tuple[Any, evaluation.Scoring]]:
+    """The twelve standard pairs, each with its dataset's scoring."""
+    return [(scene, evaluation.scoring_for(name)) for name in STANDARD_DATASETS
+            for scene in datasets.load_dataset(name, data_root)]
+
+
+def time_pairs(pairs, configs=BENCH_CONFIGS, rounds: int = 5,
+               peers=tuple(SGBM_MODES)) -> dict[str, Any]:
+    """Each config and SGBM mode on each ``(scene, scoring)`` pair, one after the other
+    for ``rounds`` rounds; the fastest time of each, the stage times of that run, and its
+    error (the scoring's headline on the non-occluded pixels: bad 1.0 on middlebury2,
+    bad 2.0 on Middlebury 2014). Ratios are against SGBM HH and 5-direction, over the
+    sums."""
+    scenes = [scene for scene, _ in pairs]
+    cfgs = {name: load_config(name) for name in configs}
     warm = scenes[0]
-    pipeline.run(warm.left, warm.right, max_disp=warm.max_disp, config=cfg)  # compile
-    per_scene = {}
-    for scene in scenes:
-        sgbm = sgbm_matcher(scene.max_disp)
-        sgbm.compute(scene.left, scene.right)
-        ours, theirs, stages = [], [], []
-        for _ in range(repeats):
-            start = time.perf_counter()
-            result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp, config=cfg)
-            ours.append(time.perf_counter() - start)
-            stages.append(result.seconds)
-            start = time.perf_counter()
-            sgbm.compute(scene.left, scene.right)
-            theirs.append(time.perf_counter() - start)
+    for cfg in cfgs.values():  # compile, or load the kernels
+        pipeline.run(warm.left, warm.right, max_disp=warm.max_disp, config=cfg)
+    methods = [*cfgs, *peers]
+    per_scene: dict[str, Any] = {}
+    for scene, scoring in pairs:
+        for peer in peers:  # OpenCV's own first-call costs
+            _sgbm_run(peer, scene)
+        best = dict.fromkeys(methods, float("inf"))
+        stages: dict[str, dict[str, float]] = {}
+        disparities: dict[str, np.ndarray] = {}
+        for _ in range(rounds):
+            for name in methods:
+                start = time.perf_counter()
+                if name in cfgs:
+                    result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp,
+                                          min_disp=scene.min_disp, config=cfgs[name])
+                    disp = result.disparity
+                else:
+                    disp = _sgbm_run(name, scene)
+                seconds = time.perf_counter() - start
+                if seconds < best[name]:
+                    best[name] = seconds
+                    if name in cfgs:
+                        stages[name] = result.seconds
+                disparities[name] = disp  # the same every round (deterministic)
+        mask = evaluation.headline_mask(scene)
         per_scene[scene.name] = {
-            "vsmatch": statistics.median(ours), "sgbm": statistics.median(theirs),
-            "stages": {k: statistics.median(s[k] for s in stages) for k in stages[0]}}
-    total_ours = sum(s["vsmatch"] for s in per_scene.values())
-    total_sgbm = sum(s["sgbm"] for s in per_scene.values())
-    stage_totals = {}
-    for s in per_scene.values():
-        for k, v in s["stages"].items():
-            stage_totals[k] = stage_totals.get(k, 0.0) + v
-    return {"scenes": per_scene, "total": {"vsmatch": total_ours, "sgbm": total_sgbm,
-                                           "ratio": total_ours / total_sgbm,
-                                           "stages": stage_totals}}
+            name: {"seconds": best[name], "stages": stages.get(name, {}),
+                   "error": scoring.measures(disparities[name], scene.ground_truth,
+                                             mask)[scoring.metric]}
+            for name in methods}
+    totals = {}
+    for name in methods:
+        seconds = sum(s[name]["seconds"] for s in per_scene.values())
+        stage_totals: dict[str, float] = {}
+        for s in per_scene.values():
+            for k, v in s[name]["stages"].items():
+                stage_totals[k] = stage_totals.get(k, 0.0) + v
+        totals[name] = {"seconds": seconds,
+                        "error": float(np.mean([s[name]["error"] for s in per_scene.values()])),
+                        "stages": stage_totals}
+    for name in methods:
+        for peer in ("sgbm-hh", "sgbm-5"):
+            if peer in totals:
+                totals[name][f"x_{peer}"] = totals[name]["seconds"] / totals[peer]["seconds"]
+    return {"rounds": rounds, "methods": methods, "configs": list(cfgs),
+            "scenes": per_scene, "total": totals}
 
 
 def _run_child(args: list[str], env: dict[str, str] | None = None) -> dict[str, Any]:
@@ -179,33 +230,37 @@ def _child_match(argv: list[str]) -> None:
                       "cost_volume_mb": volume_mb, "stages": result.seconds}))
 
 
-def size_run(data_root, matcher: str, factor: int, config: str | None,
+def size_run(data_root, matcher: str, entry: tuple, config: str | None = None,
              tall: bool = False) -> dict[str, Any]:
-    """One matcher on the size-series scene upscaled ``factor`` times (``tall``: with its
-    upside-down copy below it, twice as tall), in a child process (warm cache): seconds,
-    peak memory and bad (2 x factor) on non-occluded pixels."""
-    args = ["size", "--matcher", matcher, "--factor", str(factor),
-            "--config", config or "default"] + (["--tall"] if tall else [])
+    """One matcher (``vsmatch`` with ``config``, or an SGBM mode) on a size-series entry
+    (:data:`SIZE_SERIES`; ``tall``: with its upside-down copy below it, twice as tall),
+    in a child process (warm cache): seconds, peak memory and bad (2 x scale) on the
+    non-occluded pixels."""
+    label, dataset, scene, scale = entry
+    args = ["size", "--matcher", matcher, "--dataset", dataset, "--scene", scene,
+            "--scale", str(scale), "--config", config or "default"] + (
+        ["--tall"] if tall else [])
     if data_root is not None:
         args += ["--data-root", str(data_root)]
     if matcher == "vsmatch":
         _run_child(args)  # fill the cache for this shape of call
-    return _run_child(args)
+    return {"label": label, "config": config if matcher == "vsmatch" else None,
+            **_run_child(args)}
 
 
-def upscaled_scene(scene, factor: int):
-    """The scene ``factor`` times larger: views bicubic, ground truth and mask nearest,
-    disparities and range times ``factor``."""
-    if factor == 1:
-        return scene.left, scene.right, scene.ground_truth, scene.masks["nonocc"], \
-            scene.max_disp
-    size = (scene.left.shape[1] * factor, scene.left.shape[0] * factor)
+def upscaled_scene(scene, scale: float):
+    """The scene ``scale`` times larger: views bicubic, ground truth and masks nearest,
+    disparities times ``scale``, the range so that it still covers them."""
+    mask = scene.masks["nonocc"] if "nonocc" in scene.masks else scene.masks["all"]
+    if scale == 1:
+        return scene.left, scene.right, scene.ground_truth, mask, scene.max_disp
+    size = (round(scene.left.shape[1] * scale), round(scene.left.shape[0] * scale))
     left, right = (cv2.resize(v, size, interpolation=cv2.INTER_CUBIC)
                    for v in (scene.left, scene.right))
-    gt = cv2.resize(scene.ground_truth, size, interpolation=cv2.INTER_NEAREST) * factor
-    mask = cv2.resize(scene.masks["nonocc"].astype("uint8"), size,
-                      interpolation=cv2.INTER_NEAREST) > 0
-    return left, right, gt, mask, (scene.max_disp + 1) * factor - 1
+    gt = cv2.resize(scene.ground_truth, size, interpolation=cv2.INTER_NEAREST) * np.float32(
+        scale)
+    mask = cv2.resize(mask.astype("uint8"), size, interpolation=cv2.INTER_NEAREST) > 0
+    return left, right, gt, mask, int(np.ceil((scene.max_disp + 1) * scale)) - 1
 
 
 def _child_size(argv: list[str]) -> None:
@@ -215,14 +270,16 @@ def _child_size(argv: list[str]) -> None:
     from .metrics import bad_percent
 
     ap = argparse.ArgumentParser()
-    ap.add_argument("--matcher", choices=SIZE_MATCHERS, required=True)
-    ap.add_argument("--factor", type=int, required=True)
+    ap.add_argument("--matcher", choices=("vsmatch", *SGBM_MODES), required=True)
+    ap.add_argument("--dataset", default=SIZE_SERIES[0][1])
+    ap.add_argument("--scene", default=SIZE_SERIES[0][2])
+    ap.add_argument("--scale", type=float, required=True)
     ap.add_argument("--config", default="default")
     ap.add_argument("--data-root", default=None)
     ap.add_argument("--tall", action="store_true")
     args = ap.parse_args(argv)
-    [scene] = datasets.load_dataset(SIZE_DATASET, args.data_root, names=[SIZE_SCENE])
-    left, right, gt, mask, max_disp = upscaled_scene(scene, args.factor)
+    [scene] = datasets.load_dataset(args.dataset, args.data_root, names=[args.scene])
+    left, right, gt, mask, max_disp = upscaled_scene(scene, args.scale)
     del scene
     if args.tall:  # flipped upside down, a rectified pair stays rectified
         left, right, gt, mask = (np.ascontiguousarray(np.concatenate([a, a[::-1]]))
@@ -235,43 +292,61 @@ def _child_size(argv: list[str]) -> None:
     if args.matcher == "vsmatch":
         disp = pipeline.match(left, right, max_disp=max_disp, config=args.config)
     else:
-        from .peers import sgbm_fill_from_left
-
         raw = sgbm_matcher(max_disp, mode=SGBM_MODES[args.matcher]).compute(left, right)
         disp = sgbm_fill_from_left(raw)
     seconds = time.perf_counter() - start
     peak = _peak_rss_mb()
-    threshold = 2.0 * args.factor
-    print(json.dumps({"matcher": args.matcher, "factor": args.factor, "tall": args.tall,
+    threshold = 2.0 * args.scale
+    print(json.dumps({"matcher": args.matcher, "scale": args.scale, "tall": args.tall,
                       "size": [left.shape[1], left.shape[0]], "levels": max_disp + 1,
                       "seconds": seconds, "peak_mb": peak, "before_match_mb": before,
                       "threshold": threshold,
                       "bad_nonocc": bad_percent(disp, gt, mask, threshold)}))
 
 
-def run_benchmark(data_root=None, config: str | None = None, repeats: int = 5,
+def run_benchmark(data_root=None, configs=BENCH_CONFIGS, rounds: int = 5,
                   cold: bool = True, size: bool = True) -> dict[str, Any]:
-    """Everything :mod:`vsmatch.bench` measures, as one JSON-ready dict."""
+    """Everything :mod:`vsmatch.bench` measures, as one JSON-ready dict. Start-up,
+    the whole command and memory are measured for the first config."""
     import numba
 
-    scenes = [s for name in STANDARD_DATASETS for s in datasets.load_dataset(name, data_root)]
+    configs = list(configs)
+    first = configs[0]
     folder = datasets.dataset_folder("middlebury2", data_root) / "cones"
     left, right = folder / "imL.png", folder / "imR.png"
     cones_disp = datasets.middlebury2.SCENES["cones"][1]
     report: dict[str, Any] = {
-        "config": config or "default",
+        "configs": configs,
         "threads": {"numba": numba.get_num_threads(), "opencv": cv2.getNumThreads()},
-        "pairs": time_pairs(scenes, config, repeats),
-        "run_command_cones": run_command(left, right, cones_disp, config, 3),
-        "memory_cones": memory(left, right, cones_disp, config)}
+        "pairs": time_pairs(standard_pairs(data_root), configs, rounds),
+        "run_command_cones": run_command(left, right, cones_disp, first, 3),
+        "memory_cones": memory(left, right, cones_disp, first)}
     if cold:
-        report["cold_start_cones"] = cold_start(left, right, cones_disp, config)
+        report["cold_start_cones"] = cold_start(left, right, cones_disp, first)
     if size:
-        report["size"] = [size_run(data_root, matcher, factor, config)
-                          for factor in SIZE_FACTORS for matcher in SIZE_MATCHERS]
-        report["size"].append(size_run(data_root, "vsmatch", SIZE_FACTORS[-1], config,
-                                       tall=True))
+        runs = []
+        for entry in SIZE_SERIES:
+            try:
+                datasets.load_dataset(entry[1], data_root, names=[entry[2]])
+            except datasets.DatasetError:
+                continue  # e.g. no KITTI on this machine
+            runs += [size_run(data_root, "vsmatch", entry, c) for c in configs]
+            runs += [size_run(data_root, peer, entry) for peer in SIZE_PEERS]
+        runs.append(size_run(data_root, "vsmatch", SIZE_SERIES[-1], first, tall=True))
+        report["size"] = runs
     return report
+
+
+def tradeoff_figure(report: dict[str, Any]) -> np.ndarray:
+    """Time against error on the twelve pairs, a point per config and SGBM mode."""
+    from .figure import tradeoff_plot
+
+    total = report["pairs"]["total"]
+    points = {name: (total[name]["seconds"], total[name]["error"])
+              for name in report["pairs"]["methods"]}
+    return tradeoff_plot(points, x_label="seconds, the 12 standard pairs (fastest of "
+                         f"{report['pairs']['rounds']})", y_label="error (%)",
+                         title="time against error: lower left is better")
 
 
 def _memory_line(name: str, mem: dict[str, Any]) -> str:
@@ -281,52 +356,68 @@ def _memory_line(name: str, mem: dict[str, Any]) -> str:
             f"({mem['cost_volume_mb']:.0f} MB)")
 
 
+def _size_name(run: dict[str, Any]) -> str:
+    return run["config"] if run["matcher"] == "vsmatch" else run["matcher"]
+
+
 def format_report(report: dict[str, Any]) -> str:
     """The printed tables."""
-    lines = [f"config {report['config']}; threads: numba {report['threads']['numba']}, "
-             f"opencv {report['threads']['opencv']}", "",
-             f"{'pair':<10}{'vsmatch s':>11}{'SGBM HH s':>11}{'ratio':>8}"]
     pairs = report["pairs"]
+    methods = pairs["methods"]
+    lines = [f"configs {', '.join(report['configs'])}; threads: numba "
+             f"{report['threads']['numba']}, opencv {report['threads']['opencv']}; "
+             f"fastest of {pairs['rounds']} alternating rounds", "",
+             "seconds per pair:", f"{'pair':<12}" + "".join(f"{m:>11}" for m in methods)]
     for name, s in pairs["scenes"].items():
-        lines.append(f"{name:<10}{s['vsmatch']:11.3f}{s['sgbm']:11.3f}"
-                     f"{s['vsmatch'] / s['sgbm']:8.2f}")
-    t = pairs["total"]
-    lines.append(f"{'total':<10}{t['vsmatch']:11.3f}{t['sgbm']:11.3f}{t['ratio']:8.2f}")
-    lines += ["", "stage seconds, sum over the pairs:"]
-    for name, sec in sorted(t["stages"].items(), key=lambda kv: -kv[1]):
-        lines.append(f"  {name:<14}{sec:8.3f}")
+        lines.append(f"{name:<12}" + "".join(f"{s[m]['seconds']:11.3f}" for m in methods))
+    total = pairs["total"]
+    lines.append(f"{'total':<12}" + "".join(f"{total[m]['seconds']:11.3f}" for m in methods))
+    lines.append(f"{'x SGBM HH':<12}" + "".join(f"{total[m].get('x_sgbm-hh', 0):11.2f}"
+                                              for m in methods))
+    lines.append(f"{'x SGBM 5-dir':<12}" + "".join(f"{total[m].get('x_sgbm-5', 0):11.2f}"
+                                                 for m in methods))
+    lines.append(f"{'error':<12}" + "".join(f"{total[m]['error']:11.2f}" for m in methods))
+    lines.append("error: mean over the pairs of nonocc bad 1.0 (middlebury2) and bad 2.0 "
+                 "(Middlebury 2014)")
+    for name in pairs["configs"]:
+        lines += ["", f"{name}: stage seconds, sum over the pairs:"]
+        for stage, sec in sorted(total[name]["stages"].items(), key=lambda kv: -kv[1]):
+            lines.append(f"  {stage:<14}{sec:8.3f}")
     run = report["run_command_cones"]
     mem = report["memory_cones"]
-    lines += ["", f"vsmatch run on cones, warm cache, whole command: {run['seconds']:.2f} s",
-              _memory_line("cones", mem)]
+    first = report["configs"][0]
+    lines += ["", f"vsmatch run --config {first} on cones, warm cache, whole command: "
+                  f"{run['seconds']:.2f} s", _memory_line("cones", mem)]
     if "cold_start_cones" in report:
         cold = report["cold_start_cones"]
         lines.append(f"first call in a fresh process (a small crop): empty compilation cache "
                      f"{cold['empty_cache']['first_call_seconds']:.1f} s, cache filled "
                      f"{cold['warm_cache']['first_call_seconds']:.2f} s")
     if "size" in report:
-        lines += ["", f"size series: {SIZE_SCENE} upscaled (bicubic), each in a child process",
-                  f"{'factor':<8}{'size':>11}{'levels':>8}{'matcher':>10}{'seconds':>9}"
+        lines += ["", "size series, each run in a child process",
+                  f"{'pair':<8}{'size':>11}{'levels':>8}{'matcher':>10}{'seconds':>9}"
                   f"{'peak MB':>9}{'bad':>8}"]
         for run in report["size"]:
-            factor = f"{run['factor']}" + (" tall" if run.get("tall") else "")
-            lines.append(f"{factor:<8}{run['size'][0]:>6}x{run['size'][1]:<4}"
-                         f"{run['levels']:>8}{run['matcher']:>10}{run['seconds']:9.2f}"
+            label = run["label"] + (" tall" if run.get("tall") else "")
+            lines.append(f"{label:<8}{run['size'][0]:>6}x{run['size'][1]:<4}"
+                         f"{run['levels']:>8}{_size_name(run):>10}{run['seconds']:9.2f}"
                          f"{run['peak_mb']:9.0f}{run['bad_nonocc']:8.2f}")
-        lines.append("bad = % of non-occluded pixels off by more than 2 x factor; tall = "
+        lines.append("bad = % of non-occluded pixels off by more than 2 x scale; tall = "
                      "the pair with its upside-down copy below it")
-        big = SIZE_FACTORS[-1]
-        runs = {(r["matcher"], r.get("tall", False)): r for r in report["size"]
-                if r["factor"] == big}
-        ours = runs.get(("vsmatch", False))
-        if ours is not None and ("vsmatch", True) in runs:
-            tall = runs[("vsmatch", True)]
-            lines.append(f"twice as tall: {tall['peak_mb'] / ours['peak_mb']:.2f} x the "
-                         f"peak memory, {tall['seconds'] / ours['seconds']:.2f} x the time")
-        for peer in ("sgbm-5", "sgbm-hh"):
-            if ours is not None and (peer, False) in runs:
-                ratio = ours["seconds"] / runs[(peer, False)]["seconds"]
-                lines.append(f"{big}x: vsmatch / {peer} time {ratio:.2f}")
+        for label in dict.fromkeys(r["label"] for r in report["size"]):
+            runs = {_size_name(r): r for r in report["size"]
+                    if r["label"] == label and not r.get("tall")}
+            for name in report["configs"]:
+                if name in runs:
+                    ratios = [f"{runs[name]['seconds'] / runs[p]['seconds']:.2f} x {p}"
+                              for p in SIZE_PEERS if p in runs]
+                    lines.append(f"{label}: {name} {', '.join(ratios)}")
+        tall = [r for r in report["size"] if r.get("tall")]
+        ours = [r for r in report["size"] if r["label"] == SIZE_SERIES[-1][0]
+                and r["matcher"] == "vsmatch" and r["config"] == first and not r.get("tall")]
+        if tall and ours:
+            lines.append(f"twice as tall: {tall[0]['peak_mb'] / ours[0]['peak_mb']:.2f} x the "
+                         f"peak memory, {tall[0]['seconds'] / ours[0]['seconds']:.2f} x the time")
     return "\n".join(lines) + "\n"
 
 
@@ -337,5 +428,5 @@ if __name__ == "__main__":
         _child_size(sys.argv[2:])
     else:
         sys.exit("usage: python -m vsmatch.bench match LEFT RIGHT MAX_DISP [--config C] "
-                 "[--scale N] | size --matcher M --factor F  (the CLI entry is "
-                 "'vsmatch bench')")
+                 "[--scale N] | size --matcher M --scale S [--dataset D --scene S]  (the "
+                 "CLI entry is 'vsmatch bench')")

@@ -123,3 +123,47 @@ def _label(image: np.ndarray, text: str) -> np.ndarray:
 def _text(image, text, origin, *, scale, colour) -> None:
     cv2.putText(image, text, origin, cv2.FONT_HERSHEY_SIMPLEX, scale, colour,
                 max(1, round(scale * 1.6)), cv2.LINE_AA)
+
+
+def tradeoff_plot(points: dict[str, tuple[float, float]], *, x_label: str, y_label: str,
+                  title: str, size: tuple[int, int] = (760, 480)) -> np.ndarray:
+    """A scatter plot of ``name: (seconds, error)`` with each point named: the time
+    against error trade-off (``vsmatch bench --plot``). Points whose name starts with
+    ``sgbm`` are drawn grey, the others blue; lower left is better. BGR uint8."""
+    width, height = size
+    left, right, top, bottom = 70, 150, 40, 50
+    image = np.full((height, width, 3), 255, np.uint8)
+    xs = [x for x, _ in points.values()]
+    ys = [y for _, y in points.values()]
+    x_max = max(xs) * 1.1
+    y_max = max(ys) * 1.1
+
+    def to_pixel(x: float, y: float) -> tuple[int, int]:
+        return (round(left + x / x_max * (width - left - right)),
+                round(height - bottom - y / y_max * (height - top - bottom)))
+
+    black, grey = (0, 0, 0), (150, 150, 150)
+    cv2.line(image, to_pixel(0, 0), to_pixel(x_max, 0), black, 1)
+    cv2.line(image, to_pixel(0, 0), to_pixel(0, y_max), black, 1)
+    for k in range(6):  # ticks at sixths of the ranges
+        x, y = x_max * k / 6, y_max * k / 6
+        px, py = to_pixel(x, 0)
+        cv2.line(image, (px, py), (px, py + 4), black, 1)
+        _text(image, f"{x:.2f}", (px - 14, py + 18), scale=0.4, colour=black)
+        qx, qy = to_pixel(0, y)
+        cv2.line(image, (qx - 4, qy), (qx, qy), black, 1)
+        _text(image, f"{y:.1f}", (qx - 40, qy + 4), scale=0.4, colour=black)
+    _text(image, x_label, (left, height - 10), scale=0.45, colour=black)
+    _text(image, y_label, (8, top - 12), scale=0.45, colour=black)
+    _text(image, title, (left + 120, top - 12), scale=0.5, colour=black)
+    placed: list[tuple[int, int]] = []
+    for name, (x, y) in sorted(points.items(), key=lambda item: item[1][1]):
+        colour = grey if name.startswith("sgbm") else (200, 80, 0)
+        centre = to_pixel(x, y)
+        cv2.circle(image, centre, 6, colour, -1, cv2.LINE_AA)
+        label = [centre[0] + 9, centre[1] + 5]
+        while any(abs(label[0] - a) < 90 and abs(label[1] - b) < 15 for a, b in placed):
+            label[1] -= 15  # names of close points stack upwards instead of overlapping
+        placed.append((label[0], label[1]))
+        _text(image, name, tuple(label), scale=0.5, colour=colour)
+    return image
