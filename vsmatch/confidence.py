@@ -31,7 +31,7 @@ from importlib import resources
 import cv2
 import numpy as np
 
-from ._kernels.confidence import cost_curve
+from ._kernels.confidence import cost_curve, log1p_into, logistic
 from .disparity import VALID, MISMATCHED
 
 #: The features, in the order of the model's weights (a constant first).
@@ -89,7 +89,8 @@ def curve_features(curves: tuple[np.ndarray, ...],
     if arms is None:
         features["support"] = np.zeros(shape, np.float32)
     else:
-        features["support"] = np.log1p(arms.astype(np.float32).sum(axis=0))
+        features["support"] = np.empty(shape, np.float32)
+        log1p_into(arms.astype(np.float32).sum(axis=0), features["support"])
     return {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in features.items()}
 
 
@@ -108,20 +109,20 @@ def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
     valid = np.ones(shape, bool) if labels is None else labels == VALID
     row["valid"][:] = valid
     row["mismatched"][:] = False if labels is None else labels == MISMATCHED
-    np.log1p(_distance_to(valid), out=row["fill_distance"])
+    log1p_into(_distance_to(valid), row["fill_distance"])
     grey = left if left.ndim == 2 else cv2.cvtColor(left, cv2.COLOR_BGR2GRAY)
     gradient = np.abs(cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3))
     gradient += np.abs(cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3))
-    np.log1p(cv2.blur(gradient, (5, 5)), out=row["texture"])
+    log1p_into(cv2.blur(gradient, (5, 5)), row["texture"])
     finite = np.where(np.isfinite(disparity), disparity, 0).astype(np.float32)
     jumps = np.zeros(shape, bool)
     jumps[:, 1:] |= np.abs(np.diff(finite, axis=1)) > 1
     jumps[1:, :] |= np.abs(np.diff(finite, axis=0)) > 1
-    np.log1p(_distance_to(jumps), out=row["jump_distance"])
+    log1p_into(_distance_to(jumps), row["jump_distance"])
     # How far inside the right view the match lies (near its left edge, little of the
     # support region has a partner).
     inside = np.arange(shape[1], dtype=np.float32)[None, :] - finite
-    np.log1p(np.clip(inside, 0, MAX_DISTANCE), out=row["view_edge"])
+    log1p_into(np.clip(inside, 0, MAX_DISTANCE), row["view_edge"])
     return out
 
 
@@ -147,12 +148,11 @@ def combine(features: np.ndarray, disparity: np.ndarray,
     :func:`matchability` of the pixel's neighbourhood; 0 where the disparity is invalid
     or points out of the right view (x - d < 0)."""
     weights = model_weights() if weights is None else weights
-    # Element-wise, not np.tensordot: BLAS's worker threads would keep spinning and slow
-    # the next pair's Numba kernels by ~15 % on 2 cores (measured).
-    score = np.zeros(features.shape[1:], np.float32)
-    for weight, feature in zip(weights, features):
-        score += np.float32(weight) * feature
-    confidence = (1.0 / (1.0 + np.exp(-np.clip(score, -30, 30)))).astype(np.float32)
+    # A kernel, not np.tensordot: BLAS's worker threads would keep spinning and slow the
+    # next pair's Numba kernels by ~15 % on 2 cores (measured).
+    confidence = np.empty(features.shape[1:], np.float32)
+    logistic(np.ascontiguousarray(features, dtype=np.float32),
+             np.asarray(weights, dtype=np.float32), confidence)
     confidence *= matchability(features[FEATURES.index("margin")],
                                features[FEATURES.index("raw_margin")])
     confidence[out_of_view(disparity)] = 0.0

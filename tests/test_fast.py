@@ -1,0 +1,50 @@
+"""The bundled ``fast`` config (issue 21): coarse-to-fine at every size, and at most 0.6x
+SGBM's errors on every dataset, run through the real pipeline on the real data. The
+thresholds lock in what was measured (docs/performance.md) with a small margin."""
+
+import numpy as np
+import pytest
+
+from vsmatch import datasets, evaluation, pipeline, pyramid
+from vsmatch.config import load_config
+
+#: Measured with the fast config (headline: nonocc, KITTI all), and the ceiling we hold.
+MEASURED = {"middlebury2": (5.21, 5.5), "middlebury-third": (8.46, 8.8),
+            "middlebury2014-quarter": (12.30, 12.7), "kitti2015": (8.28, 8.7)}
+
+
+def test_min_levels_halves_at_least_that_often():
+    assert pyramid.coarse_levels(718, 73, 262144) == 0
+    assert pyramid.coarse_levels(718, 73, 262144, min_levels=1) == 1
+    assert pyramid.coarse_levels(2872, 292, 262144, min_levels=1) == 1  # already one
+    assert pyramid.coarse_levels(2872, 292, 262144, min_levels=2) == 2
+    # Never below 16 disparities or 64 columns, whatever is asked.
+    assert pyramid.coarse_levels(384, 16, 262144, min_levels=3) == 1
+    assert pyramid.coarse_levels(100, 60, 262144, min_levels=3) == 1
+
+
+def test_fast_is_bundled_and_searches_one_level_down(rng):
+    cfg = load_config("fast")
+    assert cfg.pyramid.min_levels == 1 and not cfg.photometric.enabled
+    left = rng.integers(0, 256, (96, 160, 3), dtype=np.uint8)
+    right = np.ascontiguousarray(np.roll(left, -6, axis=1))
+    result = pipeline.run(left, right, max_disp=24, config=cfg)
+    assert result.levels == 1
+    inside = np.s_[8:-8, 30:-8]  # away from the borders and the wrapped columns
+    assert np.mean(np.abs(result.disparity[inside] - 6) < 0.5) > 0.95
+    assert result.confidence.shape == left.shape[:2]
+    assert 0 <= result.confidence.min() and result.confidence.max() <= 1
+
+
+@pytest.mark.data
+@pytest.mark.parametrize("dataset", list(MEASURED))
+def test_fast_has_at_most_six_tenths_of_sgbms_errors(data_dir, dataset):
+    scenes = datasets.load_dataset(dataset, data_dir)
+    report = evaluation.evaluate(scenes, {"fast": "fast", "sgbm": "opencv-sgbm"},
+                                 dataset=dataset)
+    mask = "all" if dataset.startswith("kitti") else "nonocc"
+    fast = report["methods"]["fast"]["avg"][mask]
+    sgbm = report["methods"]["sgbm"]["avg"][mask]
+    measured, ceiling = MEASURED[dataset]
+    assert fast <= ceiling, (fast, measured)
+    assert fast <= 0.6 * sgbm, (fast, sgbm)
