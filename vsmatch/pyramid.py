@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 
 from . import aggregation, cost, noise, sensitivity
-from ._kernels.band import band_costs, search_band
+from ._kernels.band import RUN, band_costs, search_band
 from .config import Config
 from .disparity import VALID
 from .images import to_grey
@@ -168,7 +168,8 @@ def search_in_bands(terms: tuple, arms: np.ndarray, lo: np.ndarray, hi: np.ndarr
     need_hi = np.maximum(cv2.dilate(last, across), cv2.dilate(last, along)).astype(np.int32)
     sizes = np.maximum(need_hi - need_lo + 1, 0).astype(np.int64)
     offsets = (np.cumsum(sizes) - sizes.ravel()).reshape(sizes.shape)
-    store = np.empty(int(sizes.sum()), dtype=np.float32)
+    store = np.empty(int(sizes.sum()) + RUN, dtype=np.float32)
+    store[-RUN:] = 0.0  # read, never used, by the last pixel's short runs
     band_costs(*terms, need_lo, need_hi, offsets, store)
     out = np.empty(lo.shape, dtype=np.float32)
     search_band(store, offsets, need_lo, arms, lo, hi, n_disp, subpixel, out)

@@ -54,12 +54,23 @@ def band_costs(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, colour_r_re
                       ad_table, max_cost)
 
 
+#: Candidates summed as one fixed-length run (a vector or two): most bands are shorter,
+#: and a loop of constant length vectorises where one of 5-7 steps does not. The store
+#: holds this many values more at its end, so a short run may read past its own.
+RUN = 8
+
+
 @njit(inline="always")
 def _add_costs(local, store, offsets, need_lo, y, x, first, n):
-    """local[k] += C((y, x), first + k) for k < n, from :func:`band_costs`' store."""
+    """local[k] += C((y, x), first + k) for k < n (and for k < RUN where n <= RUN,
+    the values past n unused), from :func:`band_costs`' store."""
     at = offsets[y, x] + first - np.int64(need_lo[y, x])
-    for k in range(n):
-        local[k] += store[at + k]
+    if n <= RUN:
+        for k in range(RUN):
+            local[k] += store[at + k]
+    else:
+        for k in range(n):
+            local[k] += store[at + k]
 
 
 @njit(**KERNEL_OPTIONS)
@@ -74,7 +85,7 @@ def search_band(store, offsets, need_lo, arms, lo, hi, n_disp, subpixel, out):
     """
     height, width = lo.shape
     for y in prange(height):
-        local = np.empty(n_disp, dtype=np.float32)
+        local = np.empty(max(n_disp, RUN), dtype=np.float32)
         for x in range(width):
             a = np.int64(lo[y, x])
             b = np.int64(hi[y, x])
@@ -84,7 +95,7 @@ def search_band(store, offsets, need_lo, arms, lo, hi, n_disp, subpixel, out):
             first = max(a - 1, 0)
             last = min(b + 1, n_disp - 1)
             n = last - first + 1
-            for k in range(n):
+            for k in range(max(n, RUN)):
                 local[k] = 0.0
             # The pixel, its left and right arms, then its up and down arms.
             for j in range(-np.int64(arms[LEFT, y, x]), np.int64(arms[RIGHT, y, x]) + 1):
