@@ -117,3 +117,15 @@ def test_a_child_does_not_report_its_parents_memory():
     peak = float(subprocess.run([sys.executable, "-c", code], capture_output=True,
                                 text=True, check=True).stdout)
     assert 0 < peak < 300 and held.sum() > 0
+
+
+def test_bench_refuses_a_plot_that_is_not_png_before_any_work(tmp_path):
+    from click.testing import CliRunner
+
+    from vsmatch.cli import main
+
+    result = CliRunner().invoke(main, ["bench", "--plot", str(tmp_path / "p.jpg")])
+    assert result.exit_code == 2 and "--plot" in result.output and ".png" in result.output
+    result = CliRunner().invoke(main, ["bench", "--config", "nonesuch", "--no-size"])
+    assert result.exit_code == 1 and "nonesuch" in result.output
+    assert not list(tmp_path.iterdir())
