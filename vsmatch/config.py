@@ -161,7 +161,7 @@ class PyramidConfig:
     most ``support`` pixels."""
 
     max_row_cells: int = _param(262144, 1024, 1 << 40)
-    band: int = _param(2, 0, 64)
+    band: int = _param(0, 0, 64)
     support: int = _param(8, 1, 255)
     # Halve at least this many times, whatever the row (while 64 columns and 16
     # disparities remain): the ``fast`` config's coarse-to-fine at every size.
