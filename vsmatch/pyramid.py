@@ -94,13 +94,20 @@ def search_bands(low: np.ndarray, high: np.ndarray, rows: slice, width: int,
     """Disparities to search at the fine rows ``rows``: from twice ``low`` to twice
     ``high`` (:func:`coarse_extremes`) of the coarse pixel below, widened by ``band``;
     int32, ``lo > hi`` where there is no estimate."""
-    coarse_rows = np.minimum(np.arange(rows.start, rows.stop) // 2, low.shape[0] - 1)
-    cols = np.minimum(np.arange(width) // 2, low.shape[1] - 1)
-    low = low[coarse_rows[:, None], cols[None, :]]
-    high = high[coarse_rows[:, None], cols[None, :]]
+    # The coarse rows under the fine ones, each repeated twice along both axes.
+    first = rows.start // 2
+    stop = min((rows.stop - 1) // 2 + 1, low.shape[0])
+    rows_here = slice(rows.start - 2 * first, rows.stop - 2 * first)
+
+    def upsampled(values: np.ndarray) -> np.ndarray:
+        doubled = np.repeat(np.repeat(values[first:stop], 2, axis=0), 2, axis=1)
+        return doubled[rows_here, :width]
+
+    low, high = upsampled(low), upsampled(high)
     none = ~(low <= high)
-    lo = np.clip(np.floor(2.0 * np.where(none, 0, low)) - band, 0, max_disp).astype(np.int32)
-    hi = np.clip(np.ceil(2.0 * np.where(none, 0, high)) + band, 0, max_disp).astype(np.int32)
+    # Twice a float32 is exact in float32, and so are floor and ceil of it.
+    lo = np.clip(np.floor(2 * np.where(none, 0, low)) - band, 0, max_disp).astype(np.int32)
+    hi = np.clip(np.ceil(2 * np.where(none, 0, high)) + band, 0, max_disp).astype(np.int32)
     lo[none], hi[none] = 1, 0
     return lo, hi
 
