@@ -234,18 +234,20 @@ def size_run(data_root, matcher: str, entry: tuple, config: str | None = None,
              tall: bool = False) -> dict[str, Any]:
     """One matcher (``vsmatch`` with ``config``, or an SGBM mode) on a size-series entry
     (:data:`SIZE_SERIES`; ``tall``: with its upside-down copy below it, twice as tall),
-    in a child process (warm cache): seconds, peak memory and bad (2 x scale) on the
-    non-occluded pixels."""
+    in a child process (warm cache), twice: the faster time, peak memory and bad
+    (2 x scale) on the non-occluded pixels."""
     label, dataset, scene, scale = entry
     args = ["size", "--matcher", matcher, "--dataset", dataset, "--scene", scene,
             "--scale", str(scale), "--config", config or "default"] + (
         ["--tall"] if tall else [])
     if data_root is not None:
         args += ["--data-root", str(data_root)]
-    if matcher == "vsmatch":
-        _run_child(args)  # fill the cache for this shape of call
-    return {"label": label, "config": config if matcher == "vsmatch" else None,
-            **_run_child(args)}
+    # Twice, the faster kept: one run in a child process is at the mercy of a busy
+    # machine (the first also fills the compilation cache for this shape of call).
+    first = _run_child(args)
+    second = _run_child(args)
+    second["seconds"] = min(first["seconds"], second["seconds"])
+    return {"label": label, "config": config if matcher == "vsmatch" else None, **second}
 
 
 def upscaled_scene(scene, scale: float):
@@ -394,7 +396,7 @@ def format_report(report: dict[str, Any]) -> str:
                      f"{cold['empty_cache']['first_call_seconds']:.1f} s, cache filled "
                      f"{cold['warm_cache']['first_call_seconds']:.2f} s")
     if "size" in report:
-        lines += ["", "size series, each run in a child process",
+        lines += ["", "size series, each in a child process, the faster of two runs",
                   f"{'pair':<8}{'size':>11}{'levels':>8}{'matcher':>10}{'seconds':>9}"
                   f"{'peak MB':>9}{'bad':>8}"]
         for run in report["size"]:
