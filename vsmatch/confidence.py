@@ -31,7 +31,7 @@ from importlib import resources
 import cv2
 import numpy as np
 
-from ._kernels.confidence import cost_curve, log1p_into, logistic
+from ._kernels.confidence import cost_curve, logistic
 from .disparity import VALID, MISMATCHED
 
 #: The features, in the order of the model's weights (a constant first).
@@ -124,6 +124,13 @@ def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
     inside = np.arange(shape[1], dtype=np.float32)[None, :] - finite
     log1p_into(np.clip(inside, 0, MAX_DISTANCE), row["view_edge"])
     return out
+
+
+def log1p_into(values: np.ndarray, out: np.ndarray) -> None:
+    """out = log(1 + values), float32 (H, W), by OpenCV's vectorised log: NumPy's float32
+    log1p is not vectorised (its four calls took a third of the stage); within 3e-7 of
+    log1p on the features' values (0 .. a few hundred)."""
+    cv2.log(cv2.add(values, 1.0), dst=out)
 
 
 def _distance_to(mask: np.ndarray) -> np.ndarray:

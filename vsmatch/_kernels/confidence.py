@@ -45,16 +45,6 @@ def cost_curve(volume, disp, exclude, out_best, out_second, out_mean):
 
 
 @njit(**KERNEL_OPTIONS)
-def log1p_into(values, out):
-    """out = log(1 + values), element by element ((H, W) float32; NumPy's float32
-    log1p is not vectorised and took a third of the confidence stage)."""
-    height, width = values.shape
-    for y in prange(height):
-        for x in range(width):
-            out[y, x] = np.log1p(values[y, x])
-
-
-@njit(**KERNEL_OPTIONS)
 def logistic(features, weights, out):
     """out = 1 / (1 + exp(-clip(sum_k weights[k] features[k], -30, 30))), the sum taken
     feature by feature in float32."""
