@@ -169,3 +169,19 @@ def test_fine_levels_keep_whole_disparities_without_subpixel(teddy):
     assert np.array_equal(result.disparity, np.round(result.disparity))
     # measured 4.68 (the full search at this size: 3.83)
     assert metrics.bad_percent(result.disparity, s.ground_truth, s.masks["nonocc"], 2.0) < 6.0
+
+
+@pytest.mark.parametrize("height,width", [(31, 47), (32, 48), (5, 9)])
+def test_arms_from_below_stay_inside_the_image_and_the_length(rng, height, width):
+    import dataclasses
+
+    image = rng.integers(0, 256, (height, width, 3), dtype=np.uint8)
+    image[:, : width // 2] = 128  # a flat half: arms run to the border there
+    cfg = dataclasses.replace(load_config("fast").arms, l1=4, l2=4)
+    arms = pyramid.arms_from_below(image, cfg).astype(int)
+    xs, ys = np.arange(width), np.arange(height)[:, None]
+    assert (arms[0] <= xs).all() and (arms[1] <= width - 1 - xs).all()
+    assert (arms[2] <= ys).all() and (arms[3] <= height - 1 - ys).all()
+    assert arms.max() == 4 and arms.min() >= 0
+    if width > 16:  # long in the flat half, away from its edge
+        assert (arms[:, :, : width // 2 - 4] == 4).mean() > 0.5

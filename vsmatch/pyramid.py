@@ -20,8 +20,8 @@ import cv2
 import numpy as np
 
 from . import aggregation, cost, noise, sensitivity
+from ._kernels.arms import DOWN, RIGHT
 from ._kernels.band import RUN, band_costs, search_band
-from ._kernels.arms import DOWN, LEFT, RIGHT, UP
 from .config import ArmsConfig, Config
 from .disparity import VALID
 from .images import to_grey
@@ -167,15 +167,16 @@ def arms_from_below(view: np.ndarray, cfg: ArmsConfig) -> np.ndarray:
     small = downsample(view)
     grad, theta = sensitivity.visual_sensitivity(to_grey(small), cfg.kappa != 0)
     half = dataclasses.replace(cfg, l2=max(1, cfg.l2 // 2), l1=max(1, cfg.l1 // 2))
-    coarse = aggregation.cross_arms(small, theta, grad, half).astype(np.int32) * 2
+    coarse = aggregation.cross_arms(small, theta, grad, half) * np.uint8(2)
     height, width = view.shape[:2]
-    arms = np.repeat(np.repeat(coarse, 2, axis=1), 2, axis=2)[:, :height, :width]
-    np.minimum(arms, cfg.l2, out=arms)
-    across, down = np.arange(width), np.arange(height)[:, None]
-    for side, room in ((LEFT, across), (RIGHT, width - 1 - across), (UP, down),
-                       (DOWN, height - 1 - down)):
-        np.minimum(arms[side], room, out=arms[side])
-    return arms.astype(np.uint8)
+    arms = np.ascontiguousarray(
+        np.repeat(np.repeat(coarse, 2, axis=1), 2, axis=2)[:, :height, :width])
+    # Doubled, a left or up arm stays inside (2 (c - k) >= 0); a right or down one may
+    # pass an odd-sized border by a pixel.
+    room = np.minimum(np.arange(max(height, width))[::-1], 255).astype(np.uint8)
+    np.minimum(arms[RIGHT], room[-width:], out=arms[RIGHT])
+    np.minimum(arms[DOWN], room[-height:, None], out=arms[DOWN])
+    return arms
 
 
 def search_in_bands(terms: tuple, arms: np.ndarray, lo: np.ndarray, hi: np.ndarray,
