@@ -203,5 +203,5 @@ def search_in_bands(terms: tuple, arms: np.ndarray, lo: np.ndarray, hi: np.ndarr
     store[-RUN:] = 0.0  # read, never used, by the last pixel's short runs
     band_costs(*terms, need_lo, need_hi, offsets, store)
     out = np.empty(lo.shape, dtype=np.float32)
-    search_band(store, offsets, need_lo, arms, lo, hi, n_disp, subpixel, out)
+    search_band(store, offsets - need_lo, arms, lo, hi, n_disp, subpixel, out)
     return out

@@ -61,10 +61,10 @@ RUN = 8
 
 
 @njit(inline="always")
-def _add_costs(local, store, offsets, need_lo, y, x, first, n):
+def _add_costs(local, store, starts, y, x, first, n):
     """local[k] += C((y, x), first + k) for k < n (and for k < RUN where n <= RUN,
     the values past n unused), from :func:`band_costs`' store."""
-    at = offsets[y, x] + first - np.int64(need_lo[y, x])
+    at = starts[y, x] + first
     if n <= RUN:
         for k in range(RUN):
             local[k] += store[at + k]
@@ -74,12 +74,13 @@ def _add_costs(local, store, offsets, need_lo, y, x, first, n):
 
 
 @njit(**KERNEL_OPTIONS)
-def search_band(store, offsets, need_lo, arms, lo, hi, n_disp, subpixel, out):
+def search_band(store, starts, arms, lo, hi, n_disp, subpixel, out):
     """Best disparity in ``lo[y, x] .. hi[y, x]`` of each pixel, to sub-pixel (float32).
 
     The cost of a candidate d is the sum of the matching costs C(q, d) over the pixels q of
     the pixel's cross (its horizontal and vertical arms), read from :func:`band_costs`'
-    store, which holds every (q, d) a cross asks for. A parabola through the costs at
+    store, which holds every (q, d) a cross asks for, C(q, d) at ``starts[q] + d``
+    (``offsets - need_lo``). A parabola through the costs at
     d - 1, d, d + 1 gives the sub-pixel offset, as in the full search (``subpixel``; else
     whole disparities). ``lo > hi`` marks a pixel without an estimate: it gets ``inf``.
     """
@@ -99,11 +100,11 @@ def search_band(store, offsets, need_lo, arms, lo, hi, n_disp, subpixel, out):
                 local[k] = 0.0
             # The pixel, its left and right arms, then its up and down arms.
             for j in range(-np.int64(arms[LEFT, y, x]), np.int64(arms[RIGHT, y, x]) + 1):
-                _add_costs(local, store, offsets, need_lo, y, x + j, first, n)
+                _add_costs(local, store, starts, y, x + j, first, n)
             for i in range(1, np.int64(arms[UP, y, x]) + 1):
-                _add_costs(local, store, offsets, need_lo, y - i, x, first, n)
+                _add_costs(local, store, starts, y - i, x, first, n)
             for i in range(1, np.int64(arms[DOWN, y, x]) + 1):
-                _add_costs(local, store, offsets, need_lo, y + i, x, first, n)
+                _add_costs(local, store, starts, y + i, x, first, n)
             best = a
             best_cost = local[a - first]
             for d in range(a + 1, b + 1):
