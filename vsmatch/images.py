@@ -42,8 +42,11 @@ def mirrored(array: np.ndarray, *, axis: int = -1, pad: int = 0, fill: int = 0) 
     axis = axis % array.ndim
     shape = list(array.shape)
     shape[axis] += pad
-    out = np.full(shape, fill, dtype=array.dtype)
+    out = np.empty(shape, dtype=array.dtype)  # each entry written once
     inside = [slice(None)] * array.ndim
     inside[axis] = slice(0, array.shape[axis])
     out[tuple(inside)] = np.flip(array, axis)
+    if pad:
+        inside[axis] = slice(array.shape[axis], None)
+        out[tuple(inside)] = fill
     return out
