@@ -73,10 +73,11 @@ def test_stripes_agree_with_one_piece_but_near_seams(teddy):
     assert abs(bad_cut - bad_one) < 0.3
 
 
-def test_striped_and_pyramid_results_do_not_depend_on_threads(teddy):
+@pytest.mark.parametrize("base", ["default", "fast"])
+def test_striped_and_pyramid_results_do_not_depend_on_threads(teddy, base):
     s = teddy
     cfg = config_from_dict({"memory": {"max_mb": 60}, "pyramid": {"max_row_cells": 20000}},
-                           base=load_config(None))
+                           base=load_config(base))
     before = numba.get_num_threads()
     try:
         numba.set_num_threads(1)
@@ -87,6 +88,7 @@ def test_striped_and_pyramid_results_do_not_depend_on_threads(teddy):
         numba.set_num_threads(before)
     assert one.levels == 1
     assert one.disparity.tobytes() == many.disparity.tobytes()
+    assert one.confidence.tobytes() == many.confidence.tobytes()
 
 
 def test_refine_blocks_do_not_change_the_result(teddy, monkeypatch):
