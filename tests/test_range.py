@@ -35,8 +35,12 @@ def test_an_offset_range_finds_the_shift(rng, shift, low, high):
         assert np.isinf(disp[:, :low]).all()  # no candidate there, as with SGBM
         inner = disp[5:-5, low + 8:-5]
     else:
-        assert np.isinf(disp[:, disp.shape[1] + low:]).all()
-        inner = disp[5:-5, 5:disp.shape[1] + low - 5]
+        # Every left column keeps the candidates that lie in the right view: only where
+        # the match lies beyond its last column (x - shift >= width) is there none.
+        width = disp.shape[1]
+        assert np.mean(np.isinf(disp[:, width + shift:])) > 0.6
+        assert np.mean(disp[5:-5, width + low:width + shift] == shift) > 0.9
+        inner = disp[5:-5, 5:width + shift - 1]
     assert np.mean(inner == shift) > 0.95
 
 

@@ -96,7 +96,8 @@ def match(left: np.ndarray, right: np.ndarray, *, max_disp: int | None = None,
         The smallest disparity searched (default 0, or the found range's bottom, which
         may be negative, when ``max_disp`` is None; may be negative). As with OpenCV's
         ``minDisparity``, left pixels with no candidate in the range are invalid: the
-        first ``min_disp`` columns when it is positive, the last ``-min_disp`` when negative.
+        first ``min_disp`` columns when it is positive; when negative, the pixels whose
+        match lies beyond the right view's last column.
     config : Config, bundled config name or YAML path, optional
         The method's parameters; ``None`` uses the bundled ``default``.
 
@@ -126,26 +127,57 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int | None = None,
         result = _run_from_zero(left, right, max_disp, cfg)
         result.search_range = (0, max_disp)
         return result
-    # Disparities m .. max of the whole views are 0 .. max - m of views cropped by |m|
-    # columns: with m > 0 the left view loses its first m columns (they have no right
-    # pixel at any d >= m) and the right view its last m; with m < 0 the other way round.
-    # Every stage then runs unchanged, and the offset is added back at the end.
-    width = left.shape[1]
-    keep = slice(min_disp, None) if min_disp > 0 else slice(None, width + min_disp)
-    other = slice(None, width - min_disp) if min_disp > 0 else slice(-min_disp, None)
+    if min_disp < 0:
+        return _run_below_zero(left, right, max_disp, min_disp, cfg)
+    # Disparities m .. max of the whole views are 0 .. max - m of views cropped by m
+    # columns: the left view loses its first m columns (they have no right pixel at any
+    # d >= m) and the right view its last m. Every stage then runs unchanged, and the
+    # offset is added back at the end.
+    keep, other = slice(min_disp, None), slice(None, left.shape[1] - min_disp)
     result = _run_from_zero(np.ascontiguousarray(left[:, keep]),
                             np.ascontiguousarray(right[:, other]), max_disp - min_disp, cfg)
-    disp = np.full(left.shape[:2], INVALID_DISPARITY, dtype=np.float32)
+    return _placed(result, left.shape[:2], keep, min_disp, max_disp)
+
+
+def _run_below_zero(left: np.ndarray, right: np.ndarray, max_disp: int, min_disp: int,
+                    cfg: Config) -> MatchResult:
+    """Disparities ``min_disp .. max_disp`` with ``min_disp < 0`` (a verged rig's far
+    scene): 0 .. max - min of the left view and the right view moved |min| columns left,
+    its last |min| columns repeating its last one. Every left column keeps its candidates
+    that lie in the right view; a winner that lands in the repeated columns (x - d beyond
+    the right view's last column) is out of view, and marked invalid."""
+    width, shift = left.shape[1], -min_disp
+    moved = np.empty_like(right)
+    moved[:, :width - shift] = right[:, shift:]
+    moved[:, width - shift:] = right[:, -1:]
+    result = _run_from_zero(left, moved, max_disp - min_disp, cfg)
+    placed = _placed(result, left.shape[:2], slice(None), min_disp, max_disp)
+    columns = np.arange(width, dtype=np.float32)[None, :]
+    with np.errstate(invalid="ignore"):
+        beyond = columns - placed.disparity > width - 0.5
+    placed.disparity[beyond] = INVALID_DISPARITY
+    placed.confidence[beyond] = 0.0
+    if placed.labels is not None:
+        placed.labels[beyond] = disparity.OCCLUDED
+    return placed
+
+
+def _placed(result: MatchResult, shape: tuple[int, int], keep: slice, min_disp: int,
+            max_disp: int) -> MatchResult:
+    """``result``, of the columns ``keep`` of views ``shape`` matched from 0, as the whole
+    views' result for ``min_disp .. max_disp``: the offset added back, the columns outside
+    ``keep`` invalid (no candidate there, no confidence)."""
+    disp = np.full(shape, INVALID_DISPARITY, dtype=np.float32)
     disp[:, keep] = result.disparity + np.float32(min_disp)
     result.disparity = disp
     if result.labels is not None:
-        labels = np.full(left.shape[:2], disparity.OCCLUDED, dtype=np.uint8)
+        labels = np.full(shape, disparity.OCCLUDED, dtype=np.uint8)
         labels[:, keep] = result.labels
         result.labels = labels
-    confidence = np.zeros(left.shape[:2], dtype=np.float32)  # no candidate: no confidence
+    confidence = np.zeros(shape, dtype=np.float32)
     confidence[:, keep] = result.confidence
     result.confidence = confidence
-    result.curve = None  # it describes the cropped views
+    result.curve = None  # it describes the views as matched, not as given
     result.search_range = (min_disp, max_disp)
     return result
 
