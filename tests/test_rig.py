@@ -155,11 +155,16 @@ def cloud_errors(points, calib, truth):
 
 
 @pytest.mark.data
-def test_the_cloud_of_a_raw_rig_is_as_right_as_the_rectified_originals(scene, tmp_path):
+@pytest.mark.parametrize("name", ["Motorcycle", "ArtL"])
+def test_the_cloud_of_a_raw_rig_is_as_right_as_the_rectified_originals(data_dir, tmp_path,
+                                                                        name):
     """The issue's check: brought back to the scene's frame, the raw rig's cloud has at
     most 6 points more wrong (> 3 % off in depth) than the original's, and at least 85 %
-    as many points."""
-    found, calib = scene
+    as many points. ArtL's rectified rig reaches below zero (-40..52): its last columns
+    were cut from the match until issue 21 (0.80 as many points then, 0.94 now)."""
+    folder = datasets.dataset_folder("middlebury2014-quarter", data_dir)
+    found = datasets.load_dataset("middlebury2014-quarter", data_dir, names=[name])[0]
+    calib = geometry.read_calibration(folder / name / "calib.txt")
     (left, right), m = raw_views(found, calib)
     for name, view in (("raw_l.png", left), ("raw_r.png", right)):
         cv2.imwrite(str(tmp_path / name), view)
