@@ -31,13 +31,21 @@ from .images import to_grey
 REFINE_ROWS = 256
 
 
+#: Disparities the level below must keep for ``pyramid.min_levels`` to go down to it.
+MIN_FORCED_DISPARITIES = 10
+
+
 def coarse_levels(width: int, n_disp: int, max_row_cells: int, min_levels: int = 0) -> int:
     """How many times to halve a pair before the full search: while a row holds more
-    than ``max_row_cells`` cells, and at least ``min_levels`` times (the ``fast`` config's
-    coarse-to-fine at every size), never below 64 columns or 16 disparities."""
+    than ``max_row_cells`` cells, never below 64 columns or 16 disparities; and at least
+    ``min_levels`` times (the ``fast`` config's coarse-to-fine at every size) while the
+    level below keeps :data:`MIN_FORCED_DISPARITIES` (a small range halved leaves too
+    little to choose from: tsukuba's 16 went to 8, bad 1.0 3.2 -> 7.4; venus's 20 to 10
+    did not hurt)."""
     levels = 0
-    while ((width * n_disp > max_row_cells or levels < min_levels) and width >= 64
-           and n_disp >= 16):
+    while ((width * n_disp > max_row_cells
+            or (levels < min_levels and n_disp >= 2 * MIN_FORCED_DISPARITIES))
+           and width >= 64 and n_disp >= 16):
         width, max_disp = level_down(width, n_disp - 1)
         n_disp = max_disp + 1
         levels += 1
