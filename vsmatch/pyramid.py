@@ -66,14 +66,15 @@ def downsample(image: np.ndarray) -> np.ndarray:
 
 def upsample_nearest(array: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     """Each fine pixel (y, x) takes coarse pixel (y // 2, x // 2) (the last coarse row
-    and column where the fine size is odd beyond them)."""
-    rows = np.minimum(np.arange(shape[0]) // 2, array.shape[0] - 1)
-    cols = np.minimum(np.arange(shape[1]) // 2, array.shape[1] - 1)
+    and column where the fine size is odd beyond them), over the last two axes of
+    ``array`` (the arms' planes come along)."""
+    rows = np.minimum(np.arange(shape[0]) // 2, array.shape[-2] - 1)
+    cols = np.minimum(np.arange(shape[1]) // 2, array.shape[-1] - 1)
     if rows[-1] == (shape[0] - 1) // 2 and cols[-1] == (shape[1] - 1) // 2:
         # The usual case, every index y // 2: repeating is several times faster.
-        return np.ascontiguousarray(
-            np.repeat(np.repeat(array, 2, axis=0)[:shape[0]], 2, axis=1)[:, :shape[1]])
-    return array[rows[:, None], cols[None, :]]
+        doubled = np.repeat(np.repeat(array, 2, axis=-2)[..., :shape[0], :], 2, axis=-1)
+        return np.ascontiguousarray(doubled[..., :shape[1]])
+    return array[..., rows[:, None], cols[None, :]]
 
 
 def coarse_extremes(coarse: np.ndarray, coarse_labels: np.ndarray | None
@@ -98,21 +99,11 @@ def coarse_extremes(coarse: np.ndarray, coarse_labels: np.ndarray | None
     return low, high
 
 
-def search_bands(low: np.ndarray, high: np.ndarray, rows: slice, width: int,
-                 max_disp: int, band: int) -> tuple[np.ndarray, np.ndarray]:
-    """Disparities to search at the fine rows ``rows``: from twice ``low`` to twice
-    ``high`` (:func:`coarse_extremes`) of the coarse pixel below, widened by ``band``;
-    int32, ``lo > hi`` where there is no estimate."""
-    # The coarse rows under the fine ones, each repeated twice along both axes.
-    first = rows.start // 2
-    stop = min((rows.stop - 1) // 2 + 1, low.shape[0])
-    rows_here = slice(rows.start - 2 * first, rows.stop - 2 * first)
-
-    def upsampled(values: np.ndarray) -> np.ndarray:
-        doubled = np.repeat(np.repeat(values[first:stop], 2, axis=0), 2, axis=1)
-        return doubled[rows_here, :width]
-
-    low, high = upsampled(low), upsampled(high)
+def search_bands(low: np.ndarray, high: np.ndarray, max_disp: int, band: int
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Disparities to search at fine pixels whose coarse pixel's extremes
+    (:func:`coarse_extremes`, upsampled) are ``low`` and ``high``: from twice ``low`` to
+    twice ``high``, widened by ``band``; int32, ``lo > hi`` where there is no estimate."""
     none = ~(low <= high)
     # Twice a float32 is exact in float32, and so are floor and ceil of it.
     lo = np.clip(np.floor(2 * np.where(none, 0, low)) - band, 0, max_disp).astype(np.int32)
@@ -140,7 +131,8 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
                                    l1=min(cfg.arms.l1, support))
     margin = support + cfg.cost.census_height // 2 + 1  # + 1: the Sobel row
     height, width = left.shape[:2]
-    low, high = coarse_extremes(coarse, coarse_labels)
+    low, high = (upsample_nearest(v, (height, width))
+                 for v in coarse_extremes(coarse, coarse_labels))
     arms_all = arms_from_below(left, arms_cfg)
     out = np.empty((height, width), dtype=np.float32)
     for top in range(0, height, REFINE_ROWS):
@@ -148,15 +140,15 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
         y0, y1 = max(0, top - margin), min(height, bottom + margin)
         views = left[y0:y1], right[y0:y1]
         grey = [to_grey(v) for v in views]
-        grads = [sensitivity.visual_sensitivity(g, arms_cfg.kappa != 0) for g in grey]
+        # The magnitude for the cost; the arms come from below (arms_from_below).
+        grads = [sensitivity.visual_sensitivity(g, direction=False)[0] for g in grey]
         census = [cost.census_for(g, cfg.cost) for g in grey]
         # The margin keeps the core rows' arms inside the block.
         arms = np.ascontiguousarray(arms_all[:, y0:y1])
-        terms = cost.cost_terms(views[0], views[1], census[0], census[1], grads[0][0],
-                                grads[1][0], cfg.cost)
+        terms = cost.cost_terms(views[0], views[1], census[0], census[1], grads[0], grads[1],
+                                cfg.cost)
         # Only the core rows are searched: margin rows get an empty band.
-        lo_block, hi_block = search_bands(low, high, slice(y0, y1), width, max_disp,
-                                          cfg.pyramid.band)
+        lo_block, hi_block = search_bands(low[y0:y1], high[y0:y1], max_disp, cfg.pyramid.band)
         for rows in (slice(0, top - y0), slice(bottom - y0, None)):
             lo_block[rows], hi_block[rows] = 1, 0
         block = search_in_bands(terms, arms, lo_block, hi_block, int(max_disp) + 1, support,
@@ -177,8 +169,7 @@ def arms_from_below(view: np.ndarray, cfg: ArmsConfig) -> np.ndarray:
     half = dataclasses.replace(cfg, l2=max(1, cfg.l2 // 2), l1=max(1, cfg.l1 // 2))
     coarse = aggregation.cross_arms(small, theta, grad, half) * np.uint8(2)
     height, width = view.shape[:2]
-    arms = np.ascontiguousarray(
-        np.repeat(np.repeat(coarse, 2, axis=1), 2, axis=2)[:, :height, :width])
+    arms = upsample_nearest(coarse, (height, width))
     # Doubled, a left or up arm stays inside (2 (c - k) >= 0); a right or down one may
     # pass an odd-sized border by a pixel.
     room = np.minimum(np.arange(max(height, width))[::-1], 255).astype(np.uint8)
