@@ -8,8 +8,7 @@ from pathlib import Path
 import click
 
 from .. import io
-from ..config import load_config
-from ..config import bundled_config_names
+from ..config import bundled_config_names, load_config
 from .common import (check_output_folder, data_root_option, echo, friendly_errors,
                      verbosity_options)
 
