@@ -75,6 +75,20 @@ def test_adapt_to_noise_changes_nothing_below_the_floor_or_when_off():
                                                      * (1 + 0.1 * residual))
     half = adapt_to_noise(cfg, 3.5)  # halfway up the ramp (floor 3, ramp 1)
     assert half.cost.presmooth_sigma == pytest.approx(0.5 * 0.1 * 3.5)
+    assert noisy.arms.l2 == cfg.arms.l2  # noise.arms_l2 unset: the arms keep their length
+
+
+def test_noisy_views_get_the_longer_arms_of_noise_arms_l2():
+    from vsmatch.config import ConfigError, config_from_dict
+    from vsmatch.noise import adapt_to_noise
+
+    cfg = config_from_dict({"noise": {"adapt": True, "floor": 3.0, "ramp": 1.0,
+                                      "arms_l2": 40}, "arms": {"l1": 7, "l2": 20}})
+    assert adapt_to_noise(cfg, 2.9).arms.l2 == 20
+    assert adapt_to_noise(cfg, 3.5).arms.l2 == 30  # halfway up the ramp
+    assert adapt_to_noise(cfg, 9.0).arms.l2 == 40
+    with pytest.raises(ConfigError, match="noise.arms_l2"):
+        config_from_dict({"noise": {"arms_l2": 5}, "arms": {"l1": 7, "l2": 20}})
 
 
 @pytest.mark.parametrize("blur", [0.5, 1.0, 2.0])

@@ -31,7 +31,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from . import datasets, evaluation, pipeline
+from . import datasets, evaluation, pipeline, volumes
 from .config import load_config
 from .peers import sgbm_fill_from_left, sgbm_matcher
 
@@ -71,6 +71,9 @@ def time_pairs(pairs, configs=BENCH_CONFIGS, rounds: int = 5,
         pipeline.run(warm.left, warm.right, max_disp=warm.max_disp, config=cfg)
     methods = [*cfgs, *peers]
     per_scene: dict[str, Any] = {}
+    # Each config keeps its volumes from round to round, as StereoMatcher does from frame
+    # to frame and each SGBM matcher its buffer.
+    pools = {name: volumes.VolumePool() for name in cfgs}
     for scene, scoring in pairs:
         channels = 1 if scene.left.ndim == 2 else scene.left.shape[2]
         sgbm = {peer: sgbm_matcher(scene.max_disp, channels, min_disp=scene.min_disp,
@@ -84,8 +87,9 @@ def time_pairs(pairs, configs=BENCH_CONFIGS, rounds: int = 5,
             for name in methods:
                 start = time.perf_counter()
                 if name in cfgs:
-                    result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp,
-                                          min_disp=scene.min_disp, config=cfgs[name])
+                    with volumes.reused(pools[name]):
+                        result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp,
+                                              min_disp=scene.min_disp, config=cfgs[name])
                 else:
                     raw = sgbm[name].compute(scene.left, scene.right)
                 seconds = time.perf_counter() - start

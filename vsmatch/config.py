@@ -62,6 +62,9 @@ class NoiseConfig:
     lambda_per_sigma: float = _param(0.0, 0.0, 10.0)
     smooth_per_sigma: float = _param(0.0, 0.0, 1.0)
     band_per_sigma: float = _param(0.0, 0.0, 10.0)
+    #: The longest arm (arms.l2) on noisy views, reached as the other changes fade in;
+    #: 0 keeps arms.l2. Noise needs longer arms to average out than clean views do.
+    arms_l2: int = _param(0, 0, 255)
 
 
 @dataclass(frozen=True)
@@ -284,6 +287,9 @@ def _check_cross_constraints(cfg: Config) -> None:
     if cfg.arms.l1 >= cfg.arms.l2:
         raise ConfigError(f"config values arms.l1 = {cfg.arms.l1} and arms.l2 = {cfg.arms.l2} "
                           "must satisfy l1 < l2")
+    if 0 < cfg.noise.arms_l2 <= cfg.arms.l1:
+        raise ConfigError(f"config value noise.arms_l2 = {cfg.noise.arms_l2} must be 0 or more "
+                          f"than arms.l1 = {cfg.arms.l1}")
     c = cfg.cost
     if c.census_width % 2 == 0 or c.census_height % 2 == 0:
         raise ConfigError("config values cost.census_width and cost.census_height must be odd")

@@ -11,6 +11,7 @@ import numpy as np
 
 from ._kernels.census import census_transform as _census_kernel
 from ._kernels.cost import matching_cost_volume
+from . import volumes
 from .config import CostConfig
 from .images import as_channels, mirrored
 
@@ -88,7 +89,7 @@ def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
                 grad_l: np.ndarray, grad_r: np.ndarray,
                 *, n_disp: int, cfg: CostConfig) -> np.ndarray:
     """The matching cost volume ``(H, W, n_disp)`` float32 (ALGORITHM.md §2)."""
-    out = np.empty(census_l.shape + (n_disp,), dtype=np.float32)
+    out = volumes.volume("cost", census_l.shape + (n_disp,))
     matching_cost_volume(*cost_terms(colour_l, colour_r, census_l, census_r, grad_l, grad_r,
                                      cfg), out)
     return out

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from . import metrics
+from . import metrics, volumes
 from .config import Config, config_from_dict, load_config
 from .datasets import DATASETS, Scene
 from .io import (colour_disparity, error_image, imwrite_atomic, write_confidence,
@@ -119,9 +119,11 @@ def full_runner(method) -> tuple[Callable, Config | None]:
         return (lambda left, right, lo, hi: (sgbm_disparity(left, right, max_disp=hi,
                                                             min_disp=lo), None)), None
     cfg = load_config(method)
+    pool = volumes.VolumePool()  # the scenes one after another reuse the volumes
 
     def run_vsmatch(left, right, lo, hi):
-        result = run(left, right, max_disp=hi, min_disp=lo, config=cfg)
+        with volumes.reused(pool):
+            result = run(left, right, max_disp=hi, min_disp=lo, config=cfg)
         return result.disparity, result.confidence
     return run_vsmatch, cfg
 

@@ -1,8 +1,9 @@
 """A matcher made once for many frames of one camera: video, a robot's stream.
 
 :class:`StereoMatcher` keeps what does not change between frames: the parsed config, a
-raw rig's rectification maps, and the disparity range found from the first frame (found
-again when the scene comes closer than it allows). Each frame's result is the same as
+raw rig's rectification maps, the disparity range found from the first frame (found
+again when the scene comes closer than it allows) and the cost volumes' memory
+(``vsmatch.volumes``). Each frame's result is the same as
 :func:`vsmatch.match` gives for that frame and range.
 """
 
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import pipeline, rig
+from . import pipeline, rig, volumes
 from .config import Config, load_config
 from .geometry import Calibration, read_calibration
 from .search_range import estimate_disparity_range
@@ -52,6 +53,7 @@ class StereoMatcher:
             else:
                 self.camera = read_calibration(paths[0])
         self.frames = 0
+        self._volumes = volumes.VolumePool()
 
     def rectify(self, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The views as matched: rectified with the rig's maps (made on the first frame)."""
@@ -68,7 +70,8 @@ class StereoMatcher:
         if self.range is None:
             self.range = self._find_range(left, right)
         low, high = self.range
-        result = pipeline.run(left, right, max_disp=high, min_disp=low, config=self.config)
+        with volumes.reused(self._volumes):
+            result = pipeline.run(left, right, max_disp=high, min_disp=low, config=self.config)
         self.frames += 1
         if not self.fixed_range and self._top_is_crowded(result, high):
             self.range = None  # the next frame looks for it again

@@ -79,7 +79,8 @@ def adapt_to_noise(cfg: Config, sigma: float) -> Config:
     colour-difference lambda, since noise spreads every colour difference by the same
     amount whatever the threshold; the census and gradient lambdas are multiplied by
     ``1 + gain * noise.lambda_per_sigma * residual``, and the census dead band grows by
-    ``gain * noise.band_per_sigma * residual``.
+    ``gain * noise.band_per_sigma * residual``. With ``noise.arms_l2`` set, the longest
+    arm moves from ``arms.l2`` towards it by ``gain``.
     """
     n = cfg.noise
     if not n.adapt or sigma <= n.floor:
@@ -97,7 +98,8 @@ def adapt_to_noise(cfg: Config, sigma: float) -> Config:
         lambda_ad=None if c.lambda_ad is None else c.lambda_ad + widen,
         census_band=c.census_band + gain * n.band_per_sigma * residual,
         presmooth_sigma=smooth)
+    l2 = a.l2 if n.arms_l2 == 0 else int(round(a.l2 + gain * (n.arms_l2 - a.l2)))
     arms = dataclasses.replace(a, tau1=a.tau1 + widen, tau2=a.tau2 + widen,
-                               tau3=a.tau3 + widen)
+                               tau3=a.tau3 + widen, l2=l2)
     scanline = dataclasses.replace(cfg.scanline, tau=cfg.scanline.tau + widen)
     return dataclasses.replace(cfg, cost=cost, arms=arms, scanline=scanline)

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from . import (aggregation, confidence, cost, disparity, noise, optimization, photometric,
-               pyramid, refinement, sensitivity)
+               pyramid, refinement, sensitivity, volumes)
 from .config import Config, CostConfig, load_config
 from .disparity import INVALID_DISPARITY
 from .images import to_grey
@@ -390,7 +390,7 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
                 arms_r = aggregation.cross_arms(right, theta_r, grad_r, cfg.arms)
     # One work volume serves aggregation, then holds the scanline costs: the cost volume
     # is allocated twice, not three times (allocation is a measurable share of the time).
-    work = np.empty_like(volume)
+    work = volumes.volume("work", volume.shape)
     if cfg.aggregation.iterations > 0:
         with stage("aggregation"):
             volume = aggregation.aggregate_cross(volume, arms_l, arms_r, scratch=work,
