@@ -5,21 +5,20 @@ from . import KERNEL_OPTIONS
 
 
 @njit(inline="always")
-def _first_step(src, dst, cur, weight, n_disp, assign):
-    """The path starts: its cost is the matching cost. Returns its minimum over d.
-    ``assign``: write ``dst`` rather than add to it."""
+def _first_step(src, dst, cur, weight, n_disp):
+    """The path starts: its cost is the matching cost. Returns its minimum over d."""
     new_min = np.float32(np.inf)
     for d in range(n_disp):
         v = src[d]
         cur[d + 1] = v
-        dst[d] = weight * v if assign else dst[d] + weight * v
+        dst[d] += weight * v
         new_min = v if v < new_min else new_min
     return new_min
 
 
 @njit(inline="always")
 def _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, prev_min, weight,
-               n_disp, bits, assign):
+               n_disp, bits):
     """One step of the path recursion over all d; returns the new minimum over d.
 
     ``prev``, ``cur``: path costs at 1 + d, with inf at both ends so that d - 1 and d + 1
@@ -40,7 +39,7 @@ def _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, prev
         best = best if best < jump1 else jump1
         v = src[d] + best - prev_min
         cur[d + 1] = v
-        dst[d] = weight * v if assign else dst[d] + weight * v
+        dst[d] += weight * v
     # Path costs are >= 0, where float32 bit patterns order like int32: an integer
     # minimum vectorises, a float one does not.
     smallest = cur_bits[1]
@@ -52,8 +51,7 @@ def _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, prev
 
 
 @njit(**KERNEL_OPTIONS)
-def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, block, fresh,
-                  out):
+def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, block, out):
     """Add ``weight`` x the path costs of both directions along every row (or column).
 
     C_r(p, d) = C(p, d) + min(C_r(p-r, d), C_r(p-r, d+-1) + P1,
@@ -66,8 +64,7 @@ def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, bl
     at the right pixel (y, x - d) of (y, x), 1 where x - d < 0. ``p1s[k]``, ``p2s[k]`` are
     the penalties where ``k`` (0, 1 or 2) of the two images change.
 
-    ``fresh``: the first direction writes ``out`` rather than adding to it (no zeroing
-    of the volume beforehand). ``block`` lines are walked side by side: along columns, so that each step reads
+    ``block`` lines are walked side by side: along columns, so that each step reads
     ``block`` neighbouring pixels of a row (memory order) rather than one.
     """
     height, width, n_disp = cost.shape
@@ -83,7 +80,6 @@ def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, bl
         prev_min = np.zeros(block, dtype=np.float32)
         bits = np.empty(1, dtype=np.int32)
         for direction in (1, -1):
-            assign = fresh and direction == 1
             start = 0 if direction == 1 else length - 1
             for step in range(length):
                 i = start + direction * step
@@ -94,7 +90,7 @@ def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, bl
                     x = i * along_rows + line * (1 - along_rows)
                     if step == 0:
                         prev_min[k] = _first_step(cost[y, x], out[y, x], paths[k, now],
-                                                  weight, n_disp, assign)
+                                                  weight, n_disp)
                         continue
                     # The edge crossed from the previous pixel: stored at the later of
                     # the two pixels along the axis.
@@ -106,7 +102,7 @@ def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, bl
                                              paths[k, now], path_bits[k, now],
                                              change_r_rev[ey, width - 1 - ex:],
                                              p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1],
-                                             m, weight, n_disp, bits, assign)
+                                             m, weight, n_disp, bits)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -140,8 +136,7 @@ def scanline_diagonal_pass(cost, change_l, change_r_rev, p1s, p2s, step_x, weigh
                 x = x0 + i * step_x
                 now = step % 2
                 if step == 0:
-                    prev_min = _first_step(cost[y, x], out[y, x], paths[now], weight, n_disp,
-                                           False)
+                    prev_min = _first_step(cost[y, x], out[y, x], paths[now], weight, n_disp)
                     continue
                 # The edge crossed is stored at the later pixel of the two, top to bottom.
                 ey = y if direction == 1 else y + 1
@@ -151,4 +146,4 @@ def scanline_diagonal_pass(cost, change_l, change_r_rev, p1s, p2s, step_x, weigh
                 prev_min = _next_step(cost[y, x], out[y, x], paths[1 - now], paths[now],
                                       path_bits[now], change_r_rev[ey, width - 1 - ex:],
                                       p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1],
-                                      m, weight, n_disp, bits, False)
+                                      m, weight, n_disp, bits)
