@@ -23,6 +23,19 @@ def test_cross_arms_match_reference(rng, kappa):
     np.testing.assert_array_equal(got, planes(want))
 
 
+@pytest.mark.parametrize("shape", [(1, 1, 3), (1, 9, 3), (9, 1, 3), (2, 3, 1), (40, 50, 1)])
+def test_cross_arms_match_reference_on_thin_and_grey_images(rng, shape):
+    """The row-at-a-time kernel narrows each step to the pixels whose arms still grow:
+    images of one row or column, and arms that stop at the border or at l2."""
+    image = rng.integers(100, 112, size=shape, dtype=np.uint8)  # long arms
+    image[:, ::7] = 0  # and some that stop at a step
+    grad = np.zeros(shape[:2], np.float32)
+    cfg = ArmsConfig(tau1=20, tau2=20, tau3=6, l1=3, l2=9)
+    got = aggregation.cross_arms(image, grad, grad, cfg)
+    want = reference.cross_arms(image, grad, grad, 20, 20, 6, 3, 9, 0.0, 200)
+    np.testing.assert_array_equal(got, planes(want))
+
+
 def test_arms_of_a_flat_image_reach_l2_or_the_border():
     image = np.full((9, 40, 3), 100, np.uint8)
     zeros = np.zeros((9, 40), np.float32)

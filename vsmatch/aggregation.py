@@ -25,7 +25,8 @@ def cross_arms(image: np.ndarray, theta: np.ndarray | None, sensitivity: np.ndar
             raise ValueError("direction-guided arms (kappa != 0) need the gradient direction")
         theta = np.zeros(strength.shape, np.float32)  # read only where kappa != 0
     out = np.empty((4,) + strength.shape, dtype=np.uint8)  # l2 <= 255 (config range)
-    _cross_arms_kernel(image, np.ascontiguousarray(theta, dtype=np.float32), strength,
+    planes = np.ascontiguousarray(np.moveaxis(image, 2, 0), dtype=np.int16)
+    _cross_arms_kernel(planes, np.ascontiguousarray(theta, dtype=np.float32), strength,
                        colour_change(image, cfg.tau2, along_rows=True),
                        colour_change(image, cfg.tau2, along_rows=False),
                        float(cfg.tau1), float(cfg.tau3), int(cfg.l1), int(cfg.l2),
