@@ -243,8 +243,10 @@ def _first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
     box = (cfg.photometric.box, cfg.photometric.box)
     step = BLUR_MAX_CHANNELS
     for first in range(0, volume.shape[2], step):
-        part = np.ascontiguousarray(volume[:, :, first:first + step])
-        volume[:, :, first:first + step] = cv2.blur(part, box).reshape(part.shape)
+        part = np.ascontiguousarray(volume[:, :, first:first + step])  # no copy if whole
+        cv2.blur(part, box, dst=part)  # in place: no new volume to map
+        if not np.shares_memory(part, volume):
+            volume[:, :, first:first + step] = part
     disp_l, disp_r = disparity.winner_takes_all_both(volume)
     labels = disparity.left_right_check(disp_l, disp_r, n_disp=max_disp + 1, tolerance=0)
     return disp_l, labels == disparity.VALID
