@@ -90,6 +90,8 @@ def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
                 *, n_disp: int, cfg: CostConfig) -> np.ndarray:
     """The matching cost volume ``(H, W, n_disp)`` float32 (ALGORITHM.md §2)."""
     out = volumes.volume("cost", census_l.shape + (n_disp,))
-    matching_cost_volume(*cost_terms(colour_l, colour_r, census_l, census_r, grad_l, grad_r,
-                                     cfg), out)
+    terms = list(cost_terms(colour_l, colour_r, census_l, census_r, grad_l, grad_r, cfg))
+    for k in (4, 5):  # the colours as planes (C, H, W), as the kernel reads them
+        terms[k] = np.ascontiguousarray(np.moveaxis(terms[k], 2, 0))
+    matching_cost_volume(*terms, out)
     return out

@@ -13,11 +13,13 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
     ``grad_table[|g_L - g_R|]`` on gradients quantised to integers, ``ad_table[s]`` for the
     sum s of the channels' absolute differences. An empty table switches its term off.
     Where x - d < 0 the cost is ``max_cost``. The right view's arrays are reversed along x.
+    The colours come as planes, (C, H, W), so that the right pixels' values of a channel
+    are contiguous over d.
     """
     height, width, n_disp = out.shape
     use_grad = grad_table.shape[0] > 0
     use_ad = ad_table.shape[0] > 0
-    channels = colour_l.shape[2]
+    channels = colour_l.shape[0]
     for y in prange(height):
         for x in range(width):
             cl = census_l[y, x]
@@ -28,21 +30,31 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
             start = width - 1 - x
             census_r = census_r_rev[y, start:]
             grad_r = grad_r_rev[y, start:]
-            colour_r = colour_r_rev[y, start:]
             costs = out[y, x]
+            if use_ad and channels == 3:
+                c0 = colour_l[0, y, x]
+                c1 = colour_l[1, y, x]
+                c2 = colour_l[2, y, x]
+                r0 = colour_r_rev[0, y, start:]
+                r1 = colour_r_rev[1, y, start:]
+                r2 = colour_r_rev[2, y, start:]
+                for d in range(last):
+                    c = census_table[popcount64(cl ^ census_r[d])]
+                    if use_grad:
+                        c += grad_table[abs(gl - grad_r[d])]
+                    c += ad_table[abs(c0 - r0[d]) + abs(c1 - r1[d]) + abs(c2 - r2[d])]
+                    costs[d] = c
+                for d in range(last, n_disp):
+                    costs[d] = max_cost
+                continue
             for d in range(last):
                 c = census_table[popcount64(cl ^ census_r[d])]
                 if use_grad:
                     c += grad_table[abs(gl - grad_r[d])]
                 if use_ad:
-                    if channels == 3:  # written out: the common case, and the hot one
-                        s = (abs(colour_l[y, x, 0] - colour_r[d, 0])
-                             + abs(colour_l[y, x, 1] - colour_r[d, 1])
-                             + abs(colour_l[y, x, 2] - colour_r[d, 2]))
-                    else:
-                        s = 0
-                        for k in range(channels):
-                            s += abs(colour_l[y, x, k] - colour_r[d, k])
+                    s = 0
+                    for k in range(channels):
+                        s += abs(colour_l[k, y, x] - colour_r_rev[k, y, start + d])
                     c += ad_table[s]
                 costs[d] = c
             for d in range(last, n_disp):
