@@ -27,9 +27,7 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
     ``out``, if given, is a work volume of the same shape to write the result into.
     """
     if out is None:
-        out = np.zeros_like(volume)
-    else:
-        out[...] = 0.0
+        out = np.empty_like(volume)  # the first pass writes every cell
     n_disp = volume.shape[2]
     divisors = np.array([1.0, cfg.reduce_one, cfg.reduce_both])
     p1s = (cfg.p1 / divisors).astype(np.float32)
@@ -40,7 +38,7 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
         change_r = colour_change(right, cfg.tau, along_rows=bool(along_rows))
         change_r_rev = mirrored(change_r, pad=n_disp, fill=1)  # no right pixel: a change
         scanline_pass(volume, change_l, change_r_rev, p1s, p2s, along_rows, weight,
-                      1 if along_rows else COLUMN_BLOCK, out)
+                      1 if along_rows else COLUMN_BLOCK, bool(along_rows), out)
     if cfg.directions == 8:
         for step_x in (1, -1):
             change_l = diagonal_colour_change(left, cfg.tau, step_x)

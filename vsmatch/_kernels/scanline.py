@@ -4,54 +4,73 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS
 
 
-@njit(inline="always")
-def _first_step(src, dst, cur, weight, n_disp):
-    """The path starts: its cost is the matching cost. Returns its minimum over d."""
-    new_min = np.float32(np.inf)
-    for d in range(n_disp):
-        v = src[d]
-        cur[d + 1] = v
-        dst[d] += weight * v
-        new_min = v if v < new_min else new_min
-    return new_min
+def _path_steps(write):
+    """The two steps of the path recursion, adding ``weight`` x the path cost to ``dst``,
+    or with ``write`` (a constant to the compiler, so no test is left in the loops, which
+    would stop LLVM vectorising them) writing it: the first walk of a volume writes every
+    cell, so the volume needs no zeroing beforehand."""
+
+    @njit(inline="always")
+    def first_step(src, dst, cur, weight, n_disp):
+        """The path starts: its cost is the matching cost. Returns its minimum over d."""
+        new_min = np.float32(np.inf)
+        for d in range(n_disp):
+            v = src[d]
+            cur[d + 1] = v
+            if write:
+                dst[d] = weight * v
+            else:
+                dst[d] += weight * v
+            new_min = v if v < new_min else new_min
+        return new_min
+
+    @njit(inline="always")
+    def next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, prev_min,
+                  weight, n_disp, bits):
+        """One step of the path recursion over all d; returns the new minimum over d.
+
+        ``prev``, ``cur``: path costs at 1 + d, with inf at both ends so that d - 1 and
+        d + 1 need no tests. ``change_r[d]`` picks the penalties: (p1a, p2a) where the
+        right image does not change at disparity d, (p1b, p2b) where it does. Written
+        without branches and table lookups so that LLVM vectorises the loop over d, and
+        with ``a if a < b else b`` rather than ``min``, whose NaN handling Numba compiles
+        into branches that stop it.
+        """
+        for d in range(n_disp):
+            c = change_r[d]
+            q1 = p1b if c else p1a
+            q2 = p2b if c else p2a
+            a = prev[d]
+            b = prev[d + 2]
+            jump1 = (a if a < b else b) + q1
+            stay = prev[d + 1]
+            best = stay if stay < q2 else q2
+            best = best if best < jump1 else jump1
+            v = src[d] + best - prev_min
+            cur[d + 1] = v
+            if write:
+                dst[d] = weight * v
+            else:
+                dst[d] += weight * v
+        # Path costs are >= 0, where float32 bit patterns order like int32: an integer
+        # minimum vectorises, a float one does not.
+        smallest = cur_bits[1]
+        for d in range(n_disp):
+            b = cur_bits[d + 1]
+            smallest = b if b < smallest else smallest
+        bits[0] = smallest
+        return bits.view(np.float32)[0]
+
+    return first_step, next_step
 
 
-@njit(inline="always")
-def _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, prev_min, weight,
-               n_disp, bits):
-    """One step of the path recursion over all d; returns the new minimum over d.
-
-    ``prev``, ``cur``: path costs at 1 + d, with inf at both ends so that d - 1 and d + 1
-    need no tests. ``change_r[d]`` picks the penalties: (p1a, p2a) where the right image
-    does not change at disparity d, (p1b, p2b) where it does. Written without branches and
-    table lookups so that LLVM vectorises the loop over d, and with ``a if a < b else b``
-    rather than ``min``, whose NaN handling Numba compiles into branches that stop it.
-    """
-    for d in range(n_disp):
-        c = change_r[d]
-        q1 = p1b if c else p1a
-        q2 = p2b if c else p2a
-        a = prev[d]
-        b = prev[d + 2]
-        jump1 = (a if a < b else b) + q1
-        stay = prev[d + 1]
-        best = stay if stay < q2 else q2
-        best = best if best < jump1 else jump1
-        v = src[d] + best - prev_min
-        cur[d + 1] = v
-        dst[d] += weight * v
-    # Path costs are >= 0, where float32 bit patterns order like int32: an integer
-    # minimum vectorises, a float one does not.
-    smallest = cur_bits[1]
-    for d in range(n_disp):
-        b = cur_bits[d + 1]
-        smallest = b if b < smallest else smallest
-    bits[0] = smallest
-    return bits.view(np.float32)[0]
+_first_step, _next_step = _path_steps(False)
+_first_step_write, _next_step_write = _path_steps(True)
 
 
 @njit(**KERNEL_OPTIONS)
-def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, block, out):
+def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, block, fresh,
+                  out):
     """Add ``weight`` x the path costs of both directions along every row (or column).
 
     C_r(p, d) = C(p, d) + min(C_r(p-r, d), C_r(p-r, d+-1) + P1,
@@ -64,6 +83,7 @@ def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, bl
     at the right pixel (y, x - d) of (y, x), 1 where x - d < 0. ``p1s[k]``, ``p2s[k]`` are
     the penalties where ``k`` (0, 1 or 2) of the two images change.
 
+    ``fresh``: ``out`` holds nothing yet; the first direction writes it rather than adds.
     ``block`` lines are walked side by side: along columns, so that each step reads
     ``block`` neighbouring pixels of a row (memory order) rather than one.
     """
@@ -80,6 +100,7 @@ def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, bl
         prev_min = np.zeros(block, dtype=np.float32)
         bits = np.empty(1, dtype=np.int32)
         for direction in (1, -1):
+            write = fresh and direction == 1
             start = 0 if direction == 1 else length - 1
             for step in range(length):
                 i = start + direction * step
@@ -89,8 +110,12 @@ def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, bl
                     y = line * along_rows + i * (1 - along_rows)
                     x = i * along_rows + line * (1 - along_rows)
                     if step == 0:
-                        prev_min[k] = _first_step(cost[y, x], out[y, x], paths[k, now],
-                                                  weight, n_disp)
+                        if write:
+                            prev_min[k] = _first_step_write(cost[y, x], out[y, x],
+                                                            paths[k, now], weight, n_disp)
+                        else:
+                            prev_min[k] = _first_step(cost[y, x], out[y, x], paths[k, now],
+                                                      weight, n_disp)
                         continue
                     # The edge crossed from the previous pixel: stored at the later of
                     # the two pixels along the axis.
@@ -98,11 +123,16 @@ def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, bl
                     ex = x if (direction == 1 or along_rows == 0) else x + 1
                     cl = change_l[ey, ex]
                     m = prev_min[k]
-                    prev_min[k] = _next_step(cost[y, x], out[y, x], paths[k, 1 - now],
-                                             paths[k, now], path_bits[k, now],
-                                             change_r_rev[ey, width - 1 - ex:],
-                                             p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1],
-                                             m, weight, n_disp, bits)
+                    src, dst, change_r = cost[y, x], out[y, x], change_r_rev[ey, width - 1 - ex:]
+                    prev, cur, cur_bits = paths[k, 1 - now], paths[k, now], path_bits[k, now]
+                    p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
+                    if write:
+                        prev_min[k] = _next_step_write(src, dst, prev, cur, cur_bits, change_r,
+                                                       p1a, p1b, p2a, p2b, m, weight, n_disp,
+                                                       bits)
+                    else:
+                        prev_min[k] = _next_step(src, dst, prev, cur, cur_bits, change_r,
+                                                 p1a, p1b, p2a, p2b, m, weight, n_disp, bits)
 
 
 @njit(**KERNEL_OPTIONS)
