@@ -58,14 +58,20 @@ GRADIENT_STEPS = 4
 
 def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
                census_l: np.ndarray, census_r: np.ndarray,
-               grad_l: np.ndarray, grad_r: np.ndarray, cfg: CostConfig) -> tuple:
+               grad_l: np.ndarray, grad_r: np.ndarray, cfg: CostConfig,
+               planar: bool = False) -> tuple:
     """The arguments the cost kernels take after the output: each view's census, quantised
     gradient and colour (the right view's reversed along x), the three lookup tables (an
-    empty one switches its term off) and the maximum cost."""
+    empty one switches its term off) and the maximum cost. ``planar``: the colours as
+    planes (C, H, W) rather than (H, W, C)."""
     n_bits = cfg.census_width * cfg.census_height - 1
     census_table = rho(np.arange(n_bits + 1), cfg.lambda_census).astype(np.float32)
     colour_l = as_channels(colour_l).astype(np.int16)
     colour_r = as_channels(colour_r).astype(np.int16)
+    channels = colour_l.shape[2]
+    if planar:
+        colour_l, colour_r = (np.ascontiguousarray(np.moveaxis(c, 2, 0))
+                              for c in (colour_l, colour_r))
     q_l = np.round(np.asarray(grad_l, np.float32) * GRADIENT_STEPS).astype(np.int32)
     q_r = np.round(np.asarray(grad_r, np.float32) * GRADIENT_STEPS).astype(np.int32)
     if cfg.lambda_gradient is None:
@@ -76,11 +82,11 @@ def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
     if cfg.lambda_ad is None or cfg.ad_weight == 0:
         ad_table = np.empty(0, np.float32)
     else:
-        channels = colour_l.shape[2]
         ad_table = (cfg.ad_weight * rho(np.arange(255 * channels + 1) / channels,
                                         cfg.lambda_ad)).astype(np.float32)
+    colour_r_rev = mirrored(colour_r, axis=-1 if planar else 1)
     return (census_l, mirrored(census_r, axis=1), q_l, mirrored(q_r, axis=1),
-            colour_l, mirrored(colour_r, axis=1), census_table, grad_table, ad_table,
+            colour_l, colour_r_rev, census_table, grad_table, ad_table,
             np.float32(max_cost(cfg)))
 
 
@@ -90,8 +96,6 @@ def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
                 *, n_disp: int, cfg: CostConfig) -> np.ndarray:
     """The matching cost volume ``(H, W, n_disp)`` float32 (ALGORITHM.md §2)."""
     out = volumes.volume("cost", census_l.shape + (n_disp,))
-    terms = list(cost_terms(colour_l, colour_r, census_l, census_r, grad_l, grad_r, cfg))
-    for k in (4, 5):  # the colours as planes (C, H, W), as the kernel reads them
-        terms[k] = np.ascontiguousarray(np.moveaxis(terms[k], 2, 0))
-    matching_cost_volume(*terms, out)
+    matching_cost_volume(*cost_terms(colour_l, colour_r, census_l, census_r, grad_l, grad_r,
+                                     cfg, planar=True), out)
     return out
