@@ -2,8 +2,8 @@
 
 Times the column pass (both directions) alone on each of the twelve standard pairs (the
 middlebury2 scenes and the Middlebury 2014 quarter-size ones, official ranges) on a random
-volume of the pair's size, for blocks of 1, 2, 4 and 8 columns
-(``vsmatch.optimization.COLUMN_BLOCK`` is the one used). The result does not depend on it.
+volume of the pair's size, for chunks of 1, 2, 8, 32 and 128 columns walked side by side
+(``vsmatch.optimization.COLUMN_CHUNK`` is the one used). The result does not depend on it.
 
     python scripts/column_blocks.py [--data-root DIR]
 """
@@ -16,11 +16,11 @@ import time
 import numpy as np
 
 from vsmatch import datasets
-from vsmatch._kernels.scanline import scanline_pass
+from vsmatch._kernels.scanline import scanline_columns
 from vsmatch.config import load_config
 from vsmatch.images import colour_change, mirrored
 
-BLOCKS = (1, 2, 4, 8)
+BLOCKS = (1, 2, 8, 32, 128)
 
 
 def main() -> None:
@@ -44,12 +44,12 @@ def main() -> None:
                                 pad=n_disp, fill=1)
             times = {}
             for block in BLOCKS:
-                run = (volume, change_l, change_r, p1s, p2s, 0, np.float32(0.25), block, out)
-                scanline_pass(*run)  # compile, warm the caches
+                run = (volume, change_l, change_r, p1s, p2s, np.float32(0.25), block, out)
+                scanline_columns(*run)  # compile, warm the caches
                 best = np.inf
                 for _ in range(5):
                     start = time.perf_counter()
-                    scanline_pass(*run)
+                    scanline_columns(*run)
                     best = min(best, time.perf_counter() - start)
                 times[block] = best
                 totals[block] += best

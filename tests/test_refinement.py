@@ -7,7 +7,7 @@ from vsmatch.config import DiscontinuityConfig, ScanlineConfig, VotingConfig
 import reference
 
 
-@pytest.mark.parametrize("directions, h, w", [(4, 7, 9), (8, 7, 9), (8, 11, 6)])
+@pytest.mark.parametrize("directions, h, w", [(4, 7, 9), (8, 7, 9), (8, 11, 6), (4, 5, 21)])
 def test_scanline_matches_reference(rng, directions, h, w):
     n = 5
     cost = rng.random((h, w, n), dtype=np.float32) * 2

@@ -4,16 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels.scanline import scanline_diagonal_pass, scanline_pass
+from ._kernels.scanline import scanline_columns, scanline_diagonal_pass, scanline_rows
 from .config import ScanlineConfig
 from .images import as_channels, colour_change, mirrored
 
-#: Columns walked side by side in the column passes. One: each walk goes down the image
-#: and back up, and one column's strip of costs and sums is still in cache for the way
-#: back; eight columns' strips are not. ``python scripts/column_blocks.py``: one column
-#: 0.34 s, two 0.74, four 0.68, eight 0.67 over the twelve standard pairs (this machine,
-#: 1 MB of L2 per core). The result does not depend on it.
-COLUMN_BLOCK = 1
+#: Columns walked side by side in the column passes (``_kernels.scanline.scanline_columns``);
+#: the result does not depend on it.
+COLUMN_CHUNK = 8
 
 
 def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
@@ -33,12 +30,15 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
     p1s = (cfg.p1 / divisors).astype(np.float32)
     p2s = (cfg.p2 / divisors).astype(np.float32)
     weight = np.float32(1.0 / cfg.directions)
-    for along_rows in (1, 0):
-        change_l = colour_change(left, cfg.tau, along_rows=bool(along_rows))
-        change_r = colour_change(right, cfg.tau, along_rows=bool(along_rows))
+    for along_rows in (True, False):
+        change_l = colour_change(left, cfg.tau, along_rows=along_rows)
+        change_r = colour_change(right, cfg.tau, along_rows=along_rows)
         change_r_rev = mirrored(change_r, pad=n_disp, fill=1)  # no right pixel: a change
-        scanline_pass(volume, change_l, change_r_rev, p1s, p2s, along_rows, weight,
-                      1 if along_rows else COLUMN_BLOCK, bool(along_rows), out)
+        if along_rows:  # first: writes every cell of ``out``
+            scanline_rows(volume, change_l, change_r_rev, p1s, p2s, weight, True, out)
+        else:
+            scanline_columns(volume, change_l, change_r_rev, p1s, p2s, weight, COLUMN_CHUNK,
+                             out)
     if cfg.directions == 8:
         for step_x in (1, -1):
             change_l = diagonal_colour_change(left, cfg.tau, step_x)

@@ -69,75 +69,96 @@ _first_step_write, _next_step_write = _path_steps(True)
 
 
 @njit(**KERNEL_OPTIONS)
-def scanline_pass(cost, change_l, change_r_rev, p1s, p2s, along_rows, weight, block, fresh,
-                  out):
-    """Add ``weight`` x the path costs of both directions along every row (or column).
+def scanline_rows(cost, change_l, change_r_rev, p1s, p2s, weight, fresh, out):
+    """Add ``weight`` x the path costs of both directions along every row.
 
     C_r(p, d) = C(p, d) + min(C_r(p-r, d), C_r(p-r, d+-1) + P1,
                               min_k C_r(p-r, k) + P2) - min_k C_r(p-r, k).
 
     ``change_l[y, x]`` is 1 where the left image's colour changes by ``tau`` or more
-    between (y, x) and its predecessor along the axis ((y, x - 1) on rows, (y - 1, x) on
-    columns; 1 where there is none). ``change_r_rev`` is the same map of the right image,
-    reversed along x and padded with ones: ``change_r_rev[y, W - 1 - x + d]`` is the change
-    at the right pixel (y, x - d) of (y, x), 1 where x - d < 0. ``p1s[k]``, ``p2s[k]`` are
-    the penalties where ``k`` (0, 1 or 2) of the two images change.
-
-    ``fresh``: ``out`` holds nothing yet; the first direction writes it rather than adds.
-    ``block`` lines are walked side by side: along columns, so that each step reads
-    ``block`` neighbouring pixels of a row (memory order) rather than one.
+    between (y, x) and its predecessor along the pass ((y, x - 1) here, (y - 1, x) in
+    :func:`scanline_columns`; 1 where there is none). ``change_r_rev`` is the same map of
+    the right image, reversed along x and padded with ones: ``change_r_rev[y, W - 1 - x +
+    d]`` is the change at the right pixel (y, x - d) of (y, x), 1 where x - d < 0.
+    ``p1s[k]``, ``p2s[k]`` are the penalties where ``k`` (0, 1 or 2) of the two images
+    change. ``fresh``: ``out`` holds nothing yet; the first direction writes it rather
+    than adds.
     """
     height, width, n_disp = cost.shape
-    n_lines = height * along_rows + width * (1 - along_rows)
-    length = width * along_rows + height * (1 - along_rows)
-    n_blocks = (n_lines + block - 1) // block
-    for blk in prange(n_blocks):
-        first = blk * block
-        n_here = min(block, n_lines - first)
-        # Two path-cost rows per line, used in turn as previous and current.
-        paths = np.full((block, 2, n_disp + 2), np.inf, dtype=np.float32)
+    for y in prange(height):
+        # Two path-cost rows, used in turn as previous and current.
+        paths = np.full((2, n_disp + 2), np.inf, dtype=np.float32)
         path_bits = paths.view(np.int32)
-        prev_min = np.zeros(block, dtype=np.float32)
         bits = np.empty(1, dtype=np.int32)
+        prev_min = np.float32(0.0)
         for direction in (1, -1):
             write = fresh and direction == 1
-            start = 0 if direction == 1 else length - 1
-            for step in range(length):
-                i = start + direction * step
+            start = 0 if direction == 1 else width - 1
+            for step in range(width):
+                x = start + direction * step
                 now = step % 2
-                for k in range(n_here):
-                    line = first + k
-                    y = line * along_rows + i * (1 - along_rows)
-                    x = i * along_rows + line * (1 - along_rows)
-                    if step == 0:
-                        if write:
-                            prev_min[k] = _first_step_write(cost[y, x], out[y, x],
-                                                            paths[k, now], weight, n_disp)
-                        else:
-                            prev_min[k] = _first_step(cost[y, x], out[y, x], paths[k, now],
-                                                      weight, n_disp)
-                        continue
-                    # The edge crossed from the previous pixel: stored at the later of
-                    # the two pixels along the axis.
-                    ey = y if (direction == 1 or along_rows == 1) else y + 1
-                    ex = x if (direction == 1 or along_rows == 0) else x + 1
-                    cl = change_l[ey, ex]
-                    m = prev_min[k]
-                    src, dst, change_r = cost[y, x], out[y, x], change_r_rev[ey, width - 1 - ex:]
-                    prev, cur, cur_bits = paths[k, 1 - now], paths[k, now], path_bits[k, now]
-                    p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
+                if step == 0:
                     if write:
-                        prev_min[k] = _next_step_write(src, dst, prev, cur, cur_bits, change_r,
-                                                       p1a, p1b, p2a, p2b, m, weight, n_disp,
-                                                       bits)
+                        prev_min = _first_step_write(cost[y, x], out[y, x], paths[now], weight,
+                                                     n_disp)
                     else:
-                        prev_min[k] = _next_step(src, dst, prev, cur, cur_bits, change_r,
-                                                 p1a, p1b, p2a, p2b, m, weight, n_disp, bits)
+                        prev_min = _first_step(cost[y, x], out[y, x], paths[now], weight, n_disp)
+                    continue
+                # The edge crossed from the previous pixel: stored at the later of the two.
+                ex = x if direction == 1 else x + 1
+                cl = change_l[y, ex]
+                m = prev_min
+                src, dst, change_r = cost[y, x], out[y, x], change_r_rev[y, width - 1 - ex:]
+                prev, cur, cur_bits = paths[1 - now], paths[now], path_bits[now]
+                p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
+                if write:
+                    prev_min = _next_step_write(src, dst, prev, cur, cur_bits, change_r, p1a,
+                                                p1b, p2a, p2b, m, weight, n_disp, bits)
+                else:
+                    prev_min = _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b,
+                                          p2a, p2b, m, weight, n_disp, bits)
+
+
+@njit(**KERNEL_OPTIONS)
+def scanline_columns(cost, change_l, change_r_rev, p1s, p2s, weight, chunk, out):
+    """:func:`scanline_rows` down and up every column, adding to ``out``.
+
+    The columns go in chunks of ``chunk``, walked side by side a row at a time: each step
+    reads the chunk's pixels of one row, neighbours in memory, where one column at a time
+    read one pixel a row (measured on the twelve standard pairs: 0.6-0.7x the time). Each
+    column's sums are its own, so the chunk size does not change the result.
+    """
+    height, width, n_disp = cost.shape
+    n_chunks = (width + chunk - 1) // chunk
+    for c in prange(n_chunks):
+        x0 = c * chunk
+        n = min(width, x0 + chunk) - x0
+        prev = np.full((n, n_disp + 2), np.inf, dtype=np.float32)
+        cur = np.full((n, n_disp + 2), np.inf, dtype=np.float32)
+        prev_min = np.zeros(n, dtype=np.float32)
+        bits = np.empty(1, dtype=np.int32)
+        for direction in (1, -1):
+            for step in range(height):
+                y = step if direction == 1 else height - 1 - step
+                ey = y if direction == 1 else y + 1  # the edge crossed, at the later row
+                cur_bits = cur.view(np.int32)
+                for k in range(n):
+                    x = x0 + k
+                    if step == 0:
+                        prev_min[k] = _first_step(cost[y, x], out[y, x], cur[k], weight, n_disp)
+                        continue
+                    cl = change_l[ey, x]
+                    m = prev_min[k]
+                    prev_min[k] = _next_step(cost[y, x], out[y, x], prev[k], cur[k], cur_bits[k],
+                                             change_r_rev[ey, width - 1 - x:], p1s[cl],
+                                             p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1], m, weight,
+                                             n_disp, bits)
+                prev, cur = cur, prev
 
 
 @njit(**KERNEL_OPTIONS)
 def scanline_diagonal_pass(cost, change_l, change_r_rev, p1s, p2s, step_x, weight, out):
-    """:func:`scanline_pass` along the diagonals that step (1, ``step_x``), both ways.
+    """:func:`scanline_rows` along the diagonals that step (1, ``step_x``), both ways, adding.
 
     ``change_l[y, x]``: 1 where the colour changes by ``tau`` or more between (y, x) and
     (y - 1, x - step_x), and where there is no such pixel; ``change_r_rev`` the same of the
