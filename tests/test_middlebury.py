@@ -34,7 +34,7 @@ def test_paper_method_on_middlebury2(middlebury2):
 
 def test_default_chain_on_middlebury2(middlebury2):
     avg, scenes = mean_nonocc(middlebury2, "default")
-    assert avg <= 2.6  # measured 2.50; the paper 3.82
+    assert avg <= 2.6  # measured 2.53; the paper 3.82
     assert scenes["venus"]["nonocc"] < 1.0 and scenes["teddy"]["nonocc"] < 4.8
 
 
