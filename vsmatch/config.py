@@ -159,11 +159,15 @@ class SubpixelConfig:
 @dataclass(frozen=True)
 class PyramidConfig:
     """Coarse-to-fine search (``vsmatch.pyramid``): halve the views while a row holds more
-    than ``max_row_cells`` width x disparity cells; at each finer level search the coarse
-    estimate's 3 x 3 range widened by ``band``, summing costs over crosses with arms of at
-    most ``support`` pixels."""
+    than ``max_row_cells`` width x disparity cells, or the pair more than ``max_cells``
+    width x height x disparity cells (0: no such limit); at each finer level search the
+    coarse estimate's 3 x 3 range widened by ``band``, summing costs over crosses with arms
+    of at most ``support`` pixels; with ``scanline``, the scanline optimisation (the
+    ``scanline`` section's values) runs over those bands before the winner is taken."""
 
     max_row_cells: int = _param(262144, 1024, 1 << 40)
+    max_cells: int = _param(0, 0, 1 << 50)
+    scanline: bool = _param(False)
     band: int = _param(0, 0, 64)
     support: int = _param(8, 1, 255)
     # Halve at least this many times, whatever the row (while 64 columns and 16

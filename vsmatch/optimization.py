@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._kernels.band import band_scanline as _band_scanline_kernel
 from ._kernels.scanline import scanline_columns, scanline_diagonal_pass, scanline_rows
 from .config import ScanlineConfig
 from .images import as_channels, colour_change, mirrored
@@ -26,9 +27,7 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
     if out is None:
         out = np.empty_like(volume)  # the first pass writes every cell
     n_disp = volume.shape[2]
-    divisors = np.array([1.0, cfg.reduce_one, cfg.reduce_both])
-    p1s = (cfg.p1 / divisors).astype(np.float32)
-    p2s = (cfg.p2 / divisors).astype(np.float32)
+    p1s, p2s = penalties(cfg)
     weight = np.float32(1.0 / cfg.directions)
     for along_rows in (True, False):
         change_l = colour_change(left, cfg.tau, along_rows=along_rows)
@@ -61,3 +60,27 @@ def diagonal_colour_change(image: np.ndarray, threshold: float, step_x: int) -> 
         diff = np.abs(image[1:, :-1] - image[:-1, 1:]).max(axis=2)
         out[1:, :-1] = diff >= threshold
     return out
+
+
+def penalties(cfg: ScanlineConfig) -> tuple[np.ndarray, np.ndarray]:
+    """P1 and P2 where 0, 1 or 2 of the views change colour (float32 arrays of three)."""
+    divisors = np.array([1.0, cfg.reduce_one, cfg.reduce_both])
+    return (cfg.p1 / divisors).astype(np.float32), (cfg.p2 / divisors).astype(np.float32)
+
+
+def band_scanline(agg: np.ndarray, agg_at: np.ndarray, first: np.ndarray, lo: np.ndarray,
+                  hi: np.ndarray, n_disp: int, left: np.ndarray, right: np.ndarray,
+                  cfg: ScanlineConfig) -> np.ndarray:
+    """:func:`scanline_optimise` over per-pixel bands (the coarse-to-fine level's): the
+    costs of pixel (y, x)'s candidates ``first .. `` at ``agg[agg_at[y, x]:]``, the
+    paths over ``lo .. hi``; the sums laid out as ``agg``. Rows and columns, both ways,
+    whatever ``cfg.directions``."""
+    p1s, p2s = penalties(cfg)
+    changes = []
+    for along_rows in (True, False):
+        changes.append(colour_change(left, cfg.tau, along_rows=along_rows))
+        changes.append(mirrored(colour_change(right, cfg.tau, along_rows=along_rows),
+                                pad=n_disp, fill=1))
+    sums = np.zeros_like(agg)
+    _band_scanline_kernel(agg, agg_at, first, lo, hi, n_disp, *changes, p1s, p2s, sums)
+    return sums

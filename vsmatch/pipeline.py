@@ -68,13 +68,16 @@ def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
     if max_disp - min_disp >= cropped or cropped < cfg.cost.census_width:
         raise ValueError(f"the range {min_disp}..{max_disp} is too wide for images "
                          f"{width} pixels wide")
-    stripe_rows(*full_search_size(cropped, max_disp - min_disp, cfg), cfg)  # budget enough?
+    stripe_rows(*full_search_size(cropped, max_disp - min_disp, cfg, left.shape[0]),
+                cfg)  # budget enough?
 
 
-def full_search_size(width: int, max_disp: int, cfg: Config) -> tuple[int, int]:
+def full_search_size(width: int, max_disp: int, cfg: Config, height: int = 0
+                     ) -> tuple[int, int]:
     """Width and disparity count of the pyramid level where the full search runs."""
     for _ in range(pyramid.coarse_levels(width, max_disp + 1, cfg.pyramid.max_row_cells,
-                                          cfg.pyramid.min_levels)):
+                                          cfg.pyramid.min_levels, height,
+                                          cfg.pyramid.max_cells)):
         width, max_disp = pyramid.level_down(width, max_disp)
     return width, max_disp + 1
 
@@ -192,7 +195,7 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
         with _stage(seconds, "photometric"):
             right, cfg, correction = _correct_exposure(left, right, max_disp, cfg)
     levels = pyramid.coarse_levels(left.shape[1], max_disp + 1, cfg.pyramid.max_row_cells,
-                                   cfg.pyramid.min_levels)
+                                   cfg.pyramid.min_levels, left.shape[0], cfg.pyramid.max_cells)
     result = _coarse_to_fine(left, right, max_disp, cfg, levels)
     result.seconds = {**seconds, **result.seconds}
     result.photometric = correction

@@ -19,9 +19,9 @@ import math
 import cv2
 import numpy as np
 
-from . import aggregation, cost, noise, sensitivity
+from . import aggregation, cost, noise, optimization, sensitivity
 from ._kernels.arms import DOWN, RIGHT
-from ._kernels.band import RUN, band_costs, search_band
+from ._kernels.band import RUN, band_aggregate, band_costs, band_winners, search_band
 from .config import ArmsConfig, Config
 from .disparity import VALID
 from .images import to_grey
@@ -35,19 +35,23 @@ REFINE_ROWS = 256
 MIN_FORCED_DISPARITIES = 10
 
 
-def coarse_levels(width: int, n_disp: int, max_row_cells: int, min_levels: int = 0) -> int:
+def coarse_levels(width: int, n_disp: int, max_row_cells: int, min_levels: int = 0,
+                  height: int = 0, max_cells: int = 0) -> int:
     """How many times to halve a pair before the full search: while a row holds more
-    than ``max_row_cells`` cells, never below 64 columns or 16 disparities; and at least
+    than ``max_row_cells`` cells or (``max_cells`` > 0) the pair of ``height`` rows more than
+    ``max_cells``, never below 64 columns or 16 disparities; and at least
     ``min_levels`` times (the ``fast`` config's coarse-to-fine at every size) while the
     level below keeps :data:`MIN_FORCED_DISPARITIES` (a small range halved leaves too
     little to choose from: tsukuba's 16 went to 8, bad 1.0 3.2 -> 7.4; venus's 20 to 10
     did not hurt)."""
     levels = 0
     while ((width * n_disp > max_row_cells
+            or 0 < max_cells < width * height * n_disp
             or (levels < min_levels and n_disp >= 2 * MIN_FORCED_DISPARITIES))
            and width >= 64 and n_disp >= 16):
         width, max_disp = level_down(width, n_disp - 1)
         n_disp = max_disp + 1
+        height = (height + 1) // 2
         levels += 1
     return levels
 
@@ -119,7 +123,10 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
 
     Noise is estimated and adapted to at this level, as at the coarse one. The work runs
     in blocks of :data:`REFINE_ROWS` rows with a margin that holds every cross and census
-    window of the block, so the result is the same as in one piece.
+    window of the block, so the result is the same as in one piece. With
+    ``pyramid.scanline`` (and the scanline stage on), the blocks keep every band's
+    aggregated costs and the scanline optimisation runs over them on the whole level
+    before the winners are taken (``optimization.band_scanline``).
     """
     if cfg.noise.adapt:
         cfg, _ = noise.adapt_to_pair(cfg, left, right)
@@ -134,7 +141,15 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
     low, high = (upsample_nearest(v, (height, width))
                  for v in coarse_extremes(coarse, coarse_labels))
     arms_all = arms_from_below(left, arms_cfg)
+    n_disp = int(max_disp) + 1
     out = np.empty((height, width), dtype=np.float32)
+    optimise = cfg.pyramid.scanline and cfg.scanline.enabled
+    if optimise:  # every band's aggregated costs, for the scanline over the whole level
+        lo_all, hi_all = search_bands(low, high, max_disp, cfg.pyramid.band)
+        first_all, last_all = candidate_range(lo_all, hi_all, n_disp)
+        sizes = np.maximum(last_all - first_all + 1, 0)
+        agg_at = (np.cumsum(sizes) - sizes.ravel()).reshape(sizes.shape)
+        agg = np.empty(int(sizes.sum()), dtype=np.float32)
     for top in range(0, height, REFINE_ROWS):
         bottom = min(height, top + REFINE_ROWS)
         y0, y1 = max(0, top - margin), min(height, bottom + margin)
@@ -151,9 +166,19 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
         lo_block, hi_block = search_bands(low[y0:y1], high[y0:y1], max_disp, cfg.pyramid.band)
         for rows in (slice(0, top - y0), slice(bottom - y0, None)):
             lo_block[rows], hi_block[rows] = 1, 0
-        block = search_in_bands(terms, arms, lo_block, hi_block, int(max_disp) + 1, support,
+        if optimise:
+            store, starts = band_store(terms, lo_block, hi_block, n_disp, support)
+            first, last = candidate_range(lo_block, hi_block, n_disp)
+            band_aggregate(store, starts, arms, first, last, agg_at[y0:y1], agg)
+            continue
+        block = search_in_bands(terms, arms, lo_block, hi_block, n_disp, support,
                                 bool(cfg.subpixel.enabled))
         out[top:bottom] = block[top - y0:bottom - y0]
+    if optimise:
+        sums = optimization.band_scanline(agg, agg_at, first_all, lo_all, hi_all, n_disp, left,
+                                          right, cfg.scanline)
+        band_winners(agg, sums, agg_at, first_all, last_all, lo_all, hi_all,
+                     bool(cfg.subpixel.enabled), out)
     return out
 
 
@@ -183,14 +208,32 @@ def search_in_bands(terms: tuple, arms: np.ndarray, lo: np.ndarray, hi: np.ndarr
     """Each pixel's best disparity in ``lo .. hi`` (float32, inf where ``lo > hi``), its
     candidates' costs summed over its cross (arms of at most ``support`` pixels).
 
-    ``terms`` are :func:`vsmatch.cost.cost_terms`' for the views. A pixel's matching costs
-    are computed once, for just the disparities the crosses that hold it ask for: the
-    bands (each widened by one, for the parabola) within ``support`` pixels along its row
-    and its column.
+    ``terms`` are :func:`vsmatch.cost.cost_terms`' for the views.
     """
+    store, starts = band_store(terms, lo, hi, n_disp, support)
+    out = np.empty(lo.shape, dtype=np.float32)
+    search_band(store, starts, arms, lo, hi, n_disp, subpixel, out)
+    return out
+
+
+def candidate_range(lo: np.ndarray, hi: np.ndarray, n_disp: int
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """The candidates whose costs a pixel's band needs: ``lo - 1 .. hi + 1`` within the
+    range (the neighbours for the parabola), int64; ``first > last`` where there is no
+    band."""
     has_band = lo <= hi
-    first = np.where(has_band, np.maximum(lo - 1, 0), n_disp).astype(np.float32)
-    last = np.where(has_band, np.minimum(hi + 1, n_disp - 1), -1).astype(np.float32)
+    first = np.where(has_band, np.maximum(lo - 1, 0), n_disp).astype(np.int64)
+    last = np.where(has_band, np.minimum(hi + 1, n_disp - 1), -1).astype(np.int64)
+    return first, last
+
+
+def band_store(terms: tuple, lo: np.ndarray, hi: np.ndarray, n_disp: int, support: int
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Every matching cost the crosses (arms of at most ``support`` pixels) of the pixels
+    with bands ``lo .. hi`` (widened by one, for the parabola) will ask for, each computed
+    once: C(q, d) at ``store[starts[q] + d]``. A pixel's costs are needed for the bands
+    within ``support`` pixels along its row and its column."""
+    first, last = (v.astype(np.float32) for v in candidate_range(lo, hi, n_disp))
     across = np.ones((1, 2 * support + 1), np.uint8)
     along = np.ones((2 * support + 1, 1), np.uint8)
     # Outside the image erode sees +inf and dilate -inf (OpenCV's morphology borders).
@@ -201,6 +244,4 @@ def search_in_bands(terms: tuple, arms: np.ndarray, lo: np.ndarray, hi: np.ndarr
     store = np.empty(int(sizes.sum()) + RUN, dtype=np.float32)
     store[-RUN:] = 0.0  # read, never used, by the last pixel's short runs
     band_costs(*terms, need_lo, need_hi, offsets, store)
-    out = np.empty(lo.shape, dtype=np.float32)
-    search_band(store, offsets - need_lo, arms, lo, hi, n_disp, subpixel, out)
-    return out
+    return store, offsets - need_lo

@@ -121,3 +121,153 @@ def search_band(store, starts, arms, lo, hi, n_disp, subpixel, out):
                     offset = (c0 - c2) / (2.0 * denom)
                     result = np.float32(best + min(0.5, max(-0.5, offset)))
             out[y, x] = result
+
+
+@njit(**KERNEL_OPTIONS)
+def band_aggregate(store, starts, arms, first, last, agg_at, agg):
+    """The mean matching cost over each pixel's cross (as :func:`search_band` sums it) of
+    every candidate d in ``first[y, x] .. last[y, x]``, written to
+    ``agg[agg_at[y, x] + d - first[y, x]]`` (nothing where ``first > last``)."""
+    height, width = first.shape
+    for y in prange(height):
+        for x in range(width):
+            a = np.int64(first[y, x])
+            n = np.int64(last[y, x]) - a + 1
+            if n <= 0:
+                continue
+            local = agg[agg_at[y, x]:agg_at[y, x] + n]
+            local[:] = 0.0
+            count = 0
+            for j in range(-np.int64(arms[LEFT, y, x]), np.int64(arms[RIGHT, y, x]) + 1):
+                at = starts[y, x + j] + a
+                for k in range(n):
+                    local[k] += store[at + k]
+                count += 1
+            for i in range(-np.int64(arms[UP, y, x]), np.int64(arms[DOWN, y, x]) + 1):
+                if i == 0:
+                    continue
+                at = starts[y + i, x] + a
+                for k in range(n):
+                    local[k] += store[at + k]
+                count += 1
+            scale = np.float32(1.0 / count)
+            for k in range(n):
+                local[k] *= scale
+
+
+@njit(inline="always")
+def _band_path(agg, agg_at, first, lo, hi, ys, xs, change_l, change_r_rev, p1s, p2s, weight,
+               later, prev, cur, out):
+    """Add ``weight`` x the scanline path costs along the pixels (ys[i], xs[i]) to ``out``,
+    over each pixel's band ``lo .. hi`` (the recursion of ``_kernels.scanline``, a
+    candidate outside the previous pixel's band counting as infinite). ``prev`` and ``cur``
+    hold path costs at 1 + d and are all infinite between pixels. ``later``: the colour
+    change crossed is stored at the later pixel in image order, this one (0) or the
+    previous one (1). A pixel without a band restarts the path."""
+    width = lo.shape[1]
+    prev_lo = np.int64(1)
+    prev_hi = np.int64(0)
+    prev_min = np.float32(0.0)
+    for i in range(ys.shape[0]):
+        y = ys[i]
+        x = xs[i]
+        a = np.int64(lo[y, x])
+        b = np.int64(hi[y, x])
+        base = agg_at[y, x] - np.int64(first[y, x])
+        smallest = np.float32(np.inf)
+        if a <= b and prev_lo > prev_hi:  # the path starts: its cost is the pixel's
+            for d in range(a, b + 1):
+                v = agg[base + d]
+                cur[d + 1] = v
+                out[base + d] += weight * v
+                smallest = v if v < smallest else smallest
+        elif a <= b:
+            ey = ys[i - later]
+            ex = xs[i - later]
+            cl = change_l[ey, ex]
+            change_r = change_r_rev[ey, width - 1 - ex:]
+            for d in range(a, b + 1):
+                c = change_r[d]
+                q1 = p1s[cl + 1] if c else p1s[cl]
+                q2 = (p2s[cl + 1] if c else p2s[cl]) + prev_min
+                s0 = prev[d]
+                s2 = prev[d + 2]
+                jump = (s0 if s0 < s2 else s2) + q1
+                stay = prev[d + 1]
+                best = stay if stay < q2 else q2
+                best = best if best < jump else jump
+                v = agg[base + d] + best - prev_min
+                cur[d + 1] = v
+                out[base + d] += weight * v
+                smallest = v if v < smallest else smallest
+        for d in range(prev_lo, prev_hi + 1):
+            prev[d + 1] = np.inf
+        for d in range(a, b + 1):  # this pixel's costs become the previous ones
+            prev[d + 1] = cur[d + 1]
+            cur[d + 1] = np.inf
+        prev_lo, prev_hi, prev_min = a, b, smallest
+
+
+@njit(**KERNEL_OPTIONS)
+def band_scanline(agg, agg_at, first, lo, hi, n_disp, change_h, change_r_h, change_v,
+                  change_r_v, p1s, p2s, out):
+    """The scanline optimisation over the bands (``_kernels.scanline``'s four directions,
+    each weighing a quarter): ``out`` (laid out as ``agg``, zeros in) gets the sum of the
+    path costs along the rows, both ways, then along the columns, both ways.
+    ``change_*``: the colour-change maps of ``optimization.scanline_optimise`` (the right
+    view's reversed and padded)."""
+    height, width = lo.shape
+    weight = np.float32(0.25)
+    for y in prange(height):
+        prev = np.full(n_disp + 2, np.inf, dtype=np.float32)
+        cur = np.full(n_disp + 2, np.inf, dtype=np.float32)
+        ys = np.full(width, y, dtype=np.int64)
+        xs = np.arange(width)
+        _band_path(agg, agg_at, first, lo, hi, ys, xs, change_h, change_r_h, p1s, p2s, weight,
+                   0, prev, cur, out)
+        prev[:] = np.inf
+        _band_path(agg, agg_at, first, lo, hi, ys, xs[::-1].copy(), change_h, change_r_h, p1s,
+                   p2s, weight, 1, prev, cur, out)
+    for x in prange(width):
+        prev = np.full(n_disp + 2, np.inf, dtype=np.float32)
+        cur = np.full(n_disp + 2, np.inf, dtype=np.float32)
+        xs = np.full(height, x, dtype=np.int64)
+        ys = np.arange(height)
+        _band_path(agg, agg_at, first, lo, hi, ys, xs, change_v, change_r_v, p1s, p2s, weight,
+                   0, prev, cur, out)
+        prev[:] = np.inf
+        _band_path(agg, agg_at, first, lo, hi, ys[::-1].copy(), xs, change_v, change_r_v, p1s,
+                   p2s, weight, 1, prev, cur, out)
+
+
+@njit(**KERNEL_OPTIONS)
+def band_winners(agg, sums, agg_at, first, last, lo, hi, subpixel, out):
+    """Each pixel's candidate in ``lo .. hi`` of least ``sums`` (ties: the smaller d), to
+    sub-pixel by a parabola through ``agg`` at d - 1, d, d + 1 (within ``first .. last``),
+    as the full search does; ``inf`` where ``lo > hi``."""
+    height, width = lo.shape
+    for y in prange(height):
+        for x in range(width):
+            a = np.int64(lo[y, x])
+            b = np.int64(hi[y, x])
+            if a > b:
+                out[y, x] = np.inf
+                continue
+            base = agg_at[y, x] - np.int64(first[y, x])
+            best = a
+            best_sum = sums[base + a]
+            for d in range(a + 1, b + 1):
+                s = sums[base + d]
+                if s < best_sum:
+                    best_sum = s
+                    best = d
+            result = np.float32(best)
+            if subpixel and best - 1 >= first[y, x] and best + 1 <= last[y, x]:
+                c0 = agg[base + best - 1]
+                c1 = agg[base + best]
+                c2 = agg[base + best + 1]
+                denom = c0 + c2 - 2.0 * c1
+                if denom > 1e-9:
+                    offset = (c0 - c2) / (2.0 * denom)
+                    result = np.float32(best + min(0.5, max(-0.5, offset)))
+            out[y, x] = result
