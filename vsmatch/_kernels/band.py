@@ -4,6 +4,7 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS
 from .arms import DOWN, LEFT, RIGHT, UP
 from .census import popcount64
+from .scanline import path_step
 
 
 @njit(inline="always")
@@ -187,16 +188,8 @@ def _band_path(agg, agg_at, first, lo, hi, ys, xs, change_l, change_r_rev, p1s, 
             cl = change_l[ey, ex]
             change_r = change_r_rev[ey, width - 1 - ex:]
             for d in range(a, b + 1):
-                c = change_r[d]
-                q1 = p1s[cl + 1] if c else p1s[cl]
-                q2 = (p2s[cl + 1] if c else p2s[cl]) + prev_min
-                s0 = prev[d]
-                s2 = prev[d + 2]
-                jump = (s0 if s0 < s2 else s2) + q1
-                stay = prev[d + 1]
-                best = stay if stay < q2 else q2
-                best = best if best < jump else jump
-                v = agg[base + d] + best - prev_min
+                k = cl + 1 if change_r[d] else cl
+                v = agg[base + d] + path_step(prev, d, p1s[k], p2s[k] + prev_min) - prev_min
                 cur[d + 1] = v
                 out[base + d] += weight * v
                 smallest = v if v < smallest else smallest
@@ -208,6 +201,20 @@ def _band_path(agg, agg_at, first, lo, hi, ys, xs, change_l, change_r_rev, p1s, 
         prev_lo, prev_hi, prev_min = a, b, smallest
 
 
+@njit(inline="always")
+def _band_paths_both_ways(agg, agg_at, first, lo, hi, ys, xs, change_l, change_r_rev, p1s,
+                          p2s, n_disp, out):
+    """:func:`_band_path` along the pixels (ys, xs), then back, each weighing a quarter."""
+    weight = np.float32(0.25)
+    prev = np.full(n_disp + 2, np.inf, dtype=np.float32)
+    cur = np.full(n_disp + 2, np.inf, dtype=np.float32)
+    _band_path(agg, agg_at, first, lo, hi, ys, xs, change_l, change_r_rev, p1s, p2s, weight,
+               0, prev, cur, out)
+    prev[:] = np.inf
+    _band_path(agg, agg_at, first, lo, hi, ys[::-1].copy(), xs[::-1].copy(), change_l,
+               change_r_rev, p1s, p2s, weight, 1, prev, cur, out)
+
+
 @njit(**KERNEL_OPTIONS)
 def band_scanline(agg, agg_at, first, lo, hi, n_disp, change_h, change_r_h, change_v,
                   change_r_v, p1s, p2s, out):
@@ -217,27 +224,13 @@ def band_scanline(agg, agg_at, first, lo, hi, n_disp, change_h, change_r_h, chan
     ``change_*``: the colour-change maps of ``optimization.scanline_optimise`` (the right
     view's reversed and padded)."""
     height, width = lo.shape
-    weight = np.float32(0.25)
     for y in prange(height):
-        prev = np.full(n_disp + 2, np.inf, dtype=np.float32)
-        cur = np.full(n_disp + 2, np.inf, dtype=np.float32)
-        ys = np.full(width, y, dtype=np.int64)
-        xs = np.arange(width)
-        _band_path(agg, agg_at, first, lo, hi, ys, xs, change_h, change_r_h, p1s, p2s, weight,
-                   0, prev, cur, out)
-        prev[:] = np.inf
-        _band_path(agg, agg_at, first, lo, hi, ys, xs[::-1].copy(), change_h, change_r_h, p1s,
-                   p2s, weight, 1, prev, cur, out)
+        _band_paths_both_ways(agg, agg_at, first, lo, hi, np.full(width, y, dtype=np.int64),
+                              np.arange(width), change_h, change_r_h, p1s, p2s, n_disp, out)
     for x in prange(width):
-        prev = np.full(n_disp + 2, np.inf, dtype=np.float32)
-        cur = np.full(n_disp + 2, np.inf, dtype=np.float32)
-        xs = np.full(height, x, dtype=np.int64)
-        ys = np.arange(height)
-        _band_path(agg, agg_at, first, lo, hi, ys, xs, change_v, change_r_v, p1s, p2s, weight,
-                   0, prev, cur, out)
-        prev[:] = np.inf
-        _band_path(agg, agg_at, first, lo, hi, ys[::-1].copy(), xs, change_v, change_r_v, p1s,
-                   p2s, weight, 1, prev, cur, out)
+        _band_paths_both_ways(agg, agg_at, first, lo, hi, np.arange(height),
+                              np.full(height, x, dtype=np.int64), change_v, change_r_v, p1s,
+                              p2s, n_disp, out)
 
 
 @njit(**KERNEL_OPTIONS)

@@ -4,6 +4,20 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS
 
 
+@njit(inline="always")
+def path_step(prev, d, p1, p2_total):
+    """The least way into disparity d from the previous pixel's path costs ``prev`` (at
+    1 + d, infinite at both ends): stay (prev), step by one (+ P1), or jump from the
+    previous minimum (``p2_total`` = P2 + that minimum). Selects, not ``min``: Numba's
+    NaN-aware ``min`` compiles into branches that stop LLVM vectorising the loop."""
+    a = prev[d]
+    b = prev[d + 2]
+    jump = (a if a < b else b) + p1
+    stay = prev[d + 1]
+    best = stay if stay < p2_total else p2_total
+    return best if best < jump else jump
+
+
 def _path_steps(write):
     """The two steps of the path recursion, adding ``weight`` x the path cost to ``dst``,
     or with ``write`` (a constant to the compiler, so no test is left in the loops, which
@@ -38,15 +52,7 @@ def _path_steps(write):
         """
         for d in range(n_disp):
             c = change_r[d]
-            q1 = p1b if c else p1a
-            q2 = p2b if c else p2a
-            a = prev[d]
-            b = prev[d + 2]
-            jump1 = (a if a < b else b) + q1
-            stay = prev[d + 1]
-            best = stay if stay < q2 else q2
-            best = best if best < jump1 else jump1
-            v = src[d] + best - prev_min
+            v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - prev_min
             cur[d + 1] = v
             if write:
                 dst[d] = weight * v
