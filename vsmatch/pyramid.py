@@ -38,15 +38,16 @@ MIN_FORCED_DISPARITIES = 10
 def coarse_levels(width: int, n_disp: int, max_row_cells: int, min_levels: int = 0,
                   height: int = 0, max_cells: int = 0) -> int:
     """How many times to halve a pair before the full search: while a row holds more
-    than ``max_row_cells`` cells or (``max_cells`` > 0) the pair of ``height`` rows more than
-    ``max_cells``, never below 64 columns or 16 disparities; and at least
-    ``min_levels`` times (the ``fast`` config's coarse-to-fine at every size) while the
+    than ``max_row_cells`` cells; at least once if the pair of ``height`` rows holds more
+    than ``max_cells`` (> 0) cells (a camera-size pair: the bands above a halved full search
+    keep its accuracy, where a second level down loses it); never below 64 columns or 16
+    disparities; and at least ``min_levels`` times (the ``fast`` config's coarse-to-fine at every size) while the
     level below keeps :data:`MIN_FORCED_DISPARITIES` (a small range halved leaves too
     little to choose from: tsukuba's 16 went to 8, bad 1.0 3.2 -> 7.4; venus's 20 to 10
     did not hurt)."""
     levels = 0
     while ((width * n_disp > max_row_cells
-            or 0 < max_cells < width * height * n_disp
+            or (levels == 0 and 0 < max_cells < width * height * n_disp)
             or (levels < min_levels and n_disp >= 2 * MIN_FORCED_DISPARITIES))
            and width >= 64 and n_disp >= 16):
         width, max_disp = level_down(width, n_disp - 1)
