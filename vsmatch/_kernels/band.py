@@ -74,6 +74,17 @@ def _add_costs(local, store, starts, y, x, first, n):
             local[k] += store[at + k]
 
 
+@njit(inline="always")
+def _parabola(best, c0, c1, c2):
+    """``best`` moved to the minimum of the parabola through the costs at best - 1, best,
+    best + 1, by at most half a disparity (float32); ``best`` where the curve is flat."""
+    denom = c0 + c2 - 2.0 * c1
+    if denom > 1e-9:
+        offset = (c0 - c2) / (2.0 * denom)
+        return np.float32(best + min(0.5, max(-0.5, offset)))
+    return np.float32(best)
+
+
 @njit(**KERNEL_OPTIONS)
 def search_band(store, starts, arms, lo, hi, n_disp, subpixel, out):
     """Best disparity in ``lo[y, x] .. hi[y, x]`` of each pixel, to sub-pixel (float32).
@@ -115,12 +126,8 @@ def search_band(store, starts, arms, lo, hi, n_disp, subpixel, out):
                     best = d
             result = np.float32(best)
             if subpixel and best - 1 >= first and best + 1 <= last:
-                c0 = local[best - 1 - first]
-                c2 = local[best + 1 - first]
-                denom = c0 + c2 - 2.0 * best_cost
-                if denom > 1e-9:
-                    offset = (c0 - c2) / (2.0 * denom)
-                    result = np.float32(best + min(0.5, max(-0.5, offset)))
+                result = _parabola(best, local[best - 1 - first], best_cost,
+                                   local[best + 1 - first])
             out[y, x] = result
 
 
@@ -256,11 +263,6 @@ def band_winners(agg, sums, agg_at, first, last, lo, hi, subpixel, out):
                     best = d
             result = np.float32(best)
             if subpixel and best - 1 >= first[y, x] and best + 1 <= last[y, x]:
-                c0 = agg[base + best - 1]
-                c1 = agg[base + best]
-                c2 = agg[base + best + 1]
-                denom = c0 + c2 - 2.0 * c1
-                if denom > 1e-9:
-                    offset = (c0 - c2) / (2.0 * denom)
-                    result = np.float32(best + min(0.5, max(-0.5, offset)))
+                result = _parabola(best, agg[base + best - 1], agg[base + best],
+                                   agg[base + best + 1])
             out[y, x] = result
