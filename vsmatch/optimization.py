@@ -30,9 +30,7 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
     p1s, p2s = penalties(cfg)
     weight = np.float32(1.0 / cfg.directions)
     for along_rows in (True, False):
-        change_l = colour_change(left, cfg.tau, along_rows=along_rows)
-        change_r = colour_change(right, cfg.tau, along_rows=along_rows)
-        change_r_rev = mirrored(change_r, pad=n_disp, fill=1)  # no right pixel: a change
+        change_l, change_r_rev = change_maps(left, right, cfg.tau, along_rows, n_disp)
         if along_rows:  # first: writes every cell of ``out``
             scanline_rows(volume, change_l, change_r_rev, p1s, p2s, weight, True, out)
         else:
@@ -62,6 +60,16 @@ def diagonal_colour_change(image: np.ndarray, threshold: float, step_x: int) -> 
     return out
 
 
+def change_maps(left: np.ndarray, right: np.ndarray, tau: float, along_rows: bool,
+                n_disp: int) -> tuple[np.ndarray, np.ndarray]:
+    """Where each view's colour changes by ``tau`` or more along the pass; the right
+    view's reversed along x and padded with ``n_disp`` ones (no right pixel: a change),
+    as the scanline kernels read it."""
+    change_r = colour_change(right, tau, along_rows=along_rows)
+    return (colour_change(left, tau, along_rows=along_rows),
+            mirrored(change_r, pad=n_disp, fill=1))
+
+
 def penalties(cfg: ScanlineConfig) -> tuple[np.ndarray, np.ndarray]:
     """P1 and P2 where 0, 1 or 2 of the views change colour (float32 arrays of three)."""
     divisors = np.array([1.0, cfg.reduce_one, cfg.reduce_both])
@@ -76,11 +84,8 @@ def band_scanline(agg: np.ndarray, agg_at: np.ndarray, first: np.ndarray, lo: np
     paths over ``lo .. hi``; the sums laid out as ``agg``. Rows and columns, both ways,
     whatever ``cfg.directions``."""
     p1s, p2s = penalties(cfg)
-    changes = []
-    for along_rows in (True, False):
-        changes.append(colour_change(left, cfg.tau, along_rows=along_rows))
-        changes.append(mirrored(colour_change(right, cfg.tau, along_rows=along_rows),
-                                pad=n_disp, fill=1))
+    changes = [m for along_rows in (True, False)
+               for m in change_maps(left, right, cfg.tau, along_rows, n_disp)]
     sums = np.zeros_like(agg)
     _band_scanline_kernel(agg, agg_at, first, lo, hi, n_disp, *changes, p1s, p2s, sums)
     return sums

@@ -41,10 +41,10 @@ def coarse_levels(width: int, n_disp: int, max_row_cells: int, min_levels: int =
     than ``max_row_cells`` cells; at least once if the pair of ``height`` rows holds more
     than ``max_cells`` (> 0) cells (a camera-size pair: the bands above a halved full search
     keep its accuracy, where a second level down loses it); never below 64 columns or 16
-    disparities; and at least ``min_levels`` times (the ``fast`` config's coarse-to-fine at every size) while the
-    level below keeps :data:`MIN_FORCED_DISPARITIES` (a small range halved leaves too
-    little to choose from: tsukuba's 16 went to 8, bad 1.0 3.2 -> 7.4; venus's 20 to 10
-    did not hurt)."""
+    disparities; and at least ``min_levels`` times (the ``fast`` config's coarse-to-fine at
+    every size) while the level below keeps :data:`MIN_FORCED_DISPARITIES` (a small range
+    halved leaves too little to choose from: tsukuba's 16 went to 8, bad 1.0 3.2 -> 7.4;
+    venus's 20 to 10 did not hurt)."""
     levels = 0
     while ((width * n_disp > max_row_cells
             or (levels == 0 and 0 < max_cells < width * height * n_disp)
@@ -144,9 +144,9 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
     arms_all = arms_from_below(left, arms_cfg)
     n_disp = int(max_disp) + 1
     out = np.empty((height, width), dtype=np.float32)
+    lo_all, hi_all = search_bands(low, high, max_disp, cfg.pyramid.band)
     optimise = cfg.pyramid.scanline and cfg.scanline.enabled
     if optimise:  # every band's aggregated costs, for the scanline over the whole level
-        lo_all, hi_all = search_bands(low, high, max_disp, cfg.pyramid.band)
         first_all, last_all = candidate_range(lo_all, hi_all, n_disp)
         sizes = np.maximum(last_all - first_all + 1, 0)
         agg_at = (np.cumsum(sizes) - sizes.ravel()).reshape(sizes.shape)
@@ -164,7 +164,7 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
         terms = cost.cost_terms(views[0], views[1], census[0], census[1], grads[0], grads[1],
                                 cfg.cost)
         # Only the core rows are searched: margin rows get an empty band.
-        lo_block, hi_block = search_bands(low[y0:y1], high[y0:y1], max_disp, cfg.pyramid.band)
+        lo_block, hi_block = lo_all[y0:y1].copy(), hi_all[y0:y1].copy()
         for rows in (slice(0, top - y0), slice(bottom - y0, None)):
             lo_block[rows], hi_block[rows] = 1, 0
         if optimise:
