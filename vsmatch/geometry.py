@@ -15,6 +15,10 @@ from pathlib import Path
 import numpy as np
 
 
+#: The largest float32.
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+
+
 class CalibrationError(ValueError):
     """A calibration that cannot be read or used; the message is one line."""
 
@@ -30,6 +34,7 @@ class Calibration:
     doffs: float = 0.0  # x-difference of the principal points (right minus left), pixels
     focal_y: float | None = None  # fy, when it differs from f
     ndisp: int | None = None  # Middlebury's search range 0 .. ndisp - 1, when given
+    size: tuple[int, int] | None = None  # (width, height) of the views, when given
 
     def __post_init__(self):
         for name in ("focal", "baseline", "cx", "cy", "doffs", "focal_y"):
@@ -50,6 +55,21 @@ class Calibration:
         if self.ndisp is None or self.ndisp >= width / 2:
             return None
         return self.ndisp
+
+    def depth_problem(self) -> str | None:
+        """Why depths of this camera do not fit float32, or None: the nearest depth
+        f B / (d + doffs) at a disparity step of 1/256 px must stay finite."""
+        if self.focal * self.baseline * 256 > FLOAT32_MAX:
+            return (f"focal length x baseline = {self.focal * self.baseline:.3g} makes "
+                    "depths too large for float32; give the baseline in a larger unit")
+        return None
+
+    def size_problem(self, shape: tuple[int, ...]) -> str | None:
+        """Why views of ``shape`` (H, W, ...) do not fit this calibration's size, or None."""
+        if self.size is None or tuple(self.size) == (shape[1], shape[0]):
+            return None
+        return (f"the calibration is for {self.size[0]}x{self.size[1]} views (width, "
+                f"height), these are {shape[1]}x{shape[0]}")
 
     def principal_point(self, shape: tuple[int, ...]) -> tuple[float, float]:
         height, width = shape[:2]
@@ -123,8 +143,18 @@ def _middlebury(fields: dict[str, str]) -> Calibration:
             raise ValueError("ndisp must be a whole number")
         ndisp = int(ndisp)
     doffs = _number(fields, "doffs") if "doffs" in fields else 0.0
+    size = None
+    if "width" in fields and "height" in fields:
+        size = (_whole(fields, "width"), _whole(fields, "height"))
     return Calibration(focal=cam0[0], baseline=_number(fields, "baseline"), cx=cam0[2],
-                       cy=cam0[5], doffs=doffs, focal_y=cam0[4], ndisp=ndisp)
+                       cy=cam0[5], doffs=doffs, focal_y=cam0[4], ndisp=ndisp, size=size)
+
+
+def _whole(fields: dict[str, str], key: str) -> int:
+    value = _number(fields, key)
+    if value != int(value) or value < 1:
+        raise ValueError(f"{key} must be a whole number of at least 1")
+    return int(value)
 
 
 def _kitti(fields: dict[str, str]) -> Calibration:

@@ -10,8 +10,11 @@ import contextlib
 import contextvars
 import glob
 import os
+import shutil
+import signal
 import sys
 import tempfile
+import threading
 from pathlib import Path
 
 import cv2
@@ -140,14 +143,16 @@ def write_atomic(path: str | Path, encode) -> None:
 
     ``encode`` receives a temporary path with the same extension (OpenCV picks the format
     from it) and must create that file; the result is renamed onto ``path`` (inside an
-    :func:`all_or_none` block, when the block ends). A failure names ``path``.
+    :func:`all_or_none` block, when the block ends). A failure names ``path``, never the
+    temporary.
     """
     path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise OSError(f"{folder}: output folder does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path), suffix=_temporary_suffix(path),
-                               dir=folder)
+    folder = check_output_file(path)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path),
+                                   suffix=_temporary_suffix(path), dir=folder)
+    except OSError as exc:
+        raise OSError(f"{path}: could not be written ({exc.strerror or exc})") from None
     os.close(fd)
     try:
         try:
@@ -159,33 +164,120 @@ def write_atomic(path: str | Path, encode) -> None:
             raise OSError(f"{path}: could not be written ({reason})") from None
         # mkstemp makes the file private (0600); give it the mode any new file gets.
         os.chmod(tmp, 0o666 & ~current_umask())
-        staged = _STAGED.get()
-        if staged is None:
-            os.replace(tmp, path)
-        else:
-            staged.append((tmp, path))
+        _land(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
 
 
+def check_output_file(path: str | Path) -> Path:
+    """The existing folder that ``path`` goes in; an output that names a folder, or goes
+    in a missing one, is refused (OSError naming ``path``)."""
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise OSError(f"{path}: output folder '{folder}' does not exist")
+    if path.is_dir():
+        raise OSError(f"{path}: is a folder, not a file name")
+    return folder
+
+
+def _land(tmp: str | Path, path: Path) -> None:
+    """Rename a finished temporary onto ``path`` now, or when the enclosing
+    :func:`all_or_none` block ends."""
+    staged = _STAGED.get()
+    if staged is None:
+        _replace(tmp, path)
+    else:
+        staged.append((str(tmp), path))
+
+
+@contextlib.contextmanager
+def staged_folder(path: str | Path, *, overwrite: bool = False):
+    """A new folder that replaces ``path`` as a whole when the block (and the enclosing
+    :func:`all_or_none` block) ends without an error, or is removed otherwise. An
+    existing ``path`` that holds anything is refused unless ``overwrite``."""
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if path.exists() and not path.is_dir():
+        raise OSError(f"{path}: is a file, not a folder")
+    if path.is_dir() and any(path.iterdir()) and not overwrite:
+        raise OSError(f"{path}: the folder is not empty (--overwrite replaces it as a "
+                      "whole)")
+    parent.mkdir(parents=True, exist_ok=True)
+    try:
+        tmp = tempfile.mkdtemp(prefix=_temporary_prefix(path), suffix=".tmp", dir=parent)
+    except OSError as exc:
+        raise OSError(f"{path}: could not be written ({exc.strerror or exc})") from None
+    try:
+        yield Path(tmp)
+        os.chmod(tmp, 0o777 & ~current_umask())
+        _land(tmp, path)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _replace(tmp: str | Path, path: Path) -> None:
+    """``os.replace``, and for a folder over an existing one: the old one set aside,
+    the new one renamed in, the old one removed."""
+    if not os.path.isdir(tmp) or not path.exists():
+        os.replace(tmp, path)
+        return
+    old = tempfile.mkdtemp(prefix=_temporary_prefix(path), suffix=".old",
+                           dir=path.parent if str(path.parent) else ".")
+    os.replace(path, Path(old) / path.name)
+    try:
+        os.replace(tmp, path)
+    except BaseException:
+        os.replace(Path(old) / path.name, path)
+        raise
+    finally:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+#: Signals whose delivery is put off while the outputs of a block are renamed into place.
+_DEFERRED_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+
+
+@contextlib.contextmanager
+def _signals_deferred():
+    """SIGINT and SIGTERM held back (delivered when the block ends), so that a run is
+    stopped before or after its renames, never between two of them."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, _DEFERRED_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+
 @contextlib.contextmanager
 def all_or_none():
     """Writes inside the block land together when it ends without an error; on an error
-    (or Ctrl-C, or SIGTERM) none of them does and their temporaries are removed."""
+    (or Ctrl-C, or SIGTERM) none of them does and their temporaries are removed. The
+    renames at the end run with SIGINT and SIGTERM deferred."""
+    if _STAGED.get() is not None:  # inside another block: its writes land with that one's
+        yield
+        return
     staged: list[tuple[str, Path]] = []
     token = _STAGED.set(staged)
     try:
         yield
-        while staged:
-            tmp, path = staged[0]
-            os.replace(tmp, path)
-            staged.pop(0)
+        with _signals_deferred():
+            while staged:
+                tmp, path = staged[0]
+                _replace(tmp, path)
+                staged.pop(0)
     finally:
         _STAGED.reset(token)
         for tmp, _ in staged:
-            if os.path.exists(tmp):
+            if os.path.isdir(tmp):
+                shutil.rmtree(tmp, ignore_errors=True)
+            elif os.path.exists(tmp):
                 os.unlink(tmp)
 
 

@@ -31,7 +31,7 @@ import cv2
 import numpy as np
 import yaml
 
-from .geometry import Calibration, CalibrationError
+from .geometry import FLOAT32_MAX, Calibration, CalibrationError
 
 #: Bytes of a calibration file read at most (real ones are a few kB).
 MAX_CALIBRATION_BYTES = 1 << 20
@@ -99,8 +99,21 @@ def _read(path: Path) -> str:
         raise CalibrationError(f"{path}: cannot read the calibration ({exc})") from None
 
 
+#: YAML events a calibration file may hold: a camchain of two cameras has a few hundred.
+MAX_CALIBRATION_NODES = 20_000
+
+
 def _yaml(path: Path, text: str):
+    """The YAML document, refusing aliases (``*name``; expanded they can take gigabytes
+    from a few hundred bytes) and more nodes than any calibration holds, before building
+    anything."""
     try:
+        for count, event in enumerate(yaml.parse(text, Loader=yaml.SafeLoader)):
+            if isinstance(event, yaml.AliasEvent):
+                raise CalibrationError(f"{path}: YAML aliases (*{event.anchor}) are not "
+                                       "accepted in a calibration file")
+            if count > MAX_CALIBRATION_NODES:
+                raise CalibrationError(f"{path}: more YAML nodes than a calibration holds")
         return yaml.safe_load(text)
     except (yaml.YAMLError, RecursionError):
         raise CalibrationError(f"{path}: not valid YAML") from None
@@ -130,42 +143,140 @@ def _first_node(storage, path: Path, names: tuple[str, ...], required: bool = Tr
     return None, None
 
 
+def _node_numbers(path: Path, name: str, node) -> np.ndarray:
+    """A FileStorage node's numbers: an OpenCV matrix, or a sequence of numbers."""
+    if node.isString() or node.isNone():
+        raise CalibrationError(f"{path}: {name} is not a matrix of numbers")
+    if node.isSeq():
+        items = [node.at(i) for i in range(node.size())]
+        if not all(item.isReal() or item.isInt() for item in items):
+            raise CalibrationError(f"{path}: {name} is not a list of numbers")
+        values = np.array([item.real() for item in items], dtype=np.float64)
+    elif node.isReal() or node.isInt():
+        values = np.array([node.real()], dtype=np.float64)
+    else:
+        values = node.mat()
+        if values is None:
+            raise CalibrationError(f"{path}: {name} is not a matrix of numbers")
+    return np.asarray(values, dtype=np.float64).ravel()
+
+
 def _opencv(path: Path) -> RawRig:
+    """An OpenCV FileStorage file. OpenCV's parser reports a broken file as cv2.error or,
+    through its Python binding, as SystemError: both are this file's one-line error."""
     try:
         storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
-    except cv2.error:
-        raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file") from None
-    if not storage.isOpened():
-        raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file")
+        opened = storage.isOpened()
+    except (cv2.error, SystemError):
+        opened = False
+    if not opened:
+        raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file (malformed "
+                               "or truncated YAML/XML)")
     try:
-        values = {}
+        values, found = {}, {}
         for key, names, shape in (("K1", ("K1", "M1", "cameraMatrix1"), (3, 3)),
                                   ("K2", ("K2", "M2", "cameraMatrix2"), (3, 3)),
                                   ("R", ("R",), (3, 3)), ("T", ("T",), (3,))):
             name, node = _first_node(storage, path, names)
-            values[key] = _matrix(path, name, node.mat(), shape)
+            values[key] = _matrix(path, name, _node_numbers(path, name, node), shape)
+            found[key] = name
         for key, names in (("D1", ("D1", "distCoeffs1")), ("D2", ("D2", "distCoeffs2"))):
             name, node = _first_node(storage, path, names, required=False)
-            values[key] = np.zeros(5) if node is None else _matrix(
-                path, name, node.mat(), (node.mat().size,))
+            found[key] = name or key
+            if node is None:
+                values[key] = np.zeros(5)
+            else:
+                numbers = _node_numbers(path, name, node)
+                values[key] = _matrix(path, name, numbers, (numbers.size,))
         size = None
         width, height = storage.getNode("image_width"), storage.getNode("image_height")
         if not width.empty() and not height.empty():
-            size = (int(width.real()), int(height.real()))
+            size = (_whole_number(path, "image_width", _node_numbers(path, "image_width", width)),
+                    _whole_number(path, "image_height",
+                                  _node_numbers(path, "image_height", height)))
         elif not storage.getNode("imageSize").empty():
-            node = storage.getNode("imageSize")
-            pair = node.mat() if node.isSeq() is False else [node.at(i).real() for i in
-                                                              range(node.size())]
-            size = tuple(int(v) for v in np.asarray(pair).ravel()[:2])
+            numbers = _node_numbers(path, "imageSize", storage.getNode("imageSize"))
+            if numbers.size != 2:
+                raise CalibrationError(f"{path}: imageSize must be two numbers (width, "
+                                       f"height), has {numbers.size}")
+            size = tuple(_whole_number(path, "imageSize", [v]) for v in numbers)
+    except (cv2.error, SystemError):
+        raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file") from None
     finally:
         storage.release()
-    return RawRig(size=_checked_size(path, size), **values)
+    return check_rig(path, RawRig(size=size, **values), found)
 
 
-def _checked_size(path: Path, size) -> tuple[int, int] | None:
-    if size is not None and (len(size) != 2 or min(size) < 1):
-        raise CalibrationError(f"{path}: the image size {size} is not width, height")
-    return None if size is None else (int(size[0]), int(size[1]))
+#: Largest image side a calibration may name.
+MAX_IMAGE_SIDE = 100_000
+
+
+def _whole_number(path: Path, key: str, value) -> int:
+    """One whole number in 1 .. MAX_IMAGE_SIDE (an image size), or a one-line error."""
+    values = np.ravel(np.asarray(value, dtype=object))
+    try:
+        number = float(values[0]) if values.size == 1 else None
+    except (TypeError, ValueError):
+        number = None
+    if number is None or not math.isfinite(number) or number != int(number) or not (
+            1 <= number <= MAX_IMAGE_SIDE):
+        shown = values[0] if values.size == 1 else list(values)
+        raise CalibrationError(f"{path}: {key} must be a whole number of pixels from 1 to "
+                               f"{MAX_IMAGE_SIDE}, got {shown}")
+    return int(number)
+
+
+#: Distortion coefficient counts OpenCV's pinhole model takes (k1 k2 p1 p2 [k3 [k4 k5 k6
+#: [s1 s2 s3 s4 [tx ty]]]]); its fisheye model takes exactly four.
+PINHOLE_COEFFICIENTS = (4, 5, 8, 12, 14)
+#: How far R R^T may be from the identity, and det R from +1.
+ROTATION_TOLERANCE = 1e-3
+
+
+def check_rig(path: Path, rig: RawRig, names: dict[str, str]) -> RawRig:
+    """Refuse a rig no camera can have, naming the key: K with a focal length that is
+    not positive, a distortion of a length the model does not take, R that is not a
+    rotation, T zero, not finite, not mostly along x, or so long that depths overflow
+    float32. ``names`` gives each matrix's key in the file."""
+    for K, D, k, d in ((rig.K1, rig.D1, "K1", "D1"), (rig.K2, rig.D2, "K2", "D2")):
+        check_camera_matrix(path, names[k], K, rig.size)
+        allowed = (4,) if rig.model == "fisheye" else PINHOLE_COEFFICIENTS
+        if D.size not in allowed:
+            raise CalibrationError(
+                f"{path}: {names[d]} has {D.size} distortion coefficients; the "
+                f"{rig.model} model takes {' or '.join(str(n) for n in allowed)}")
+    check_rotation(path, names["R"], rig.R)
+    norm = float(np.linalg.norm(rig.T))
+    if not norm > 0:
+        raise CalibrationError(f"{path}: {names['T']} is zero: the cameras are at one place")
+    if abs(rig.T[0]) <= math.hypot(rig.T[1], rig.T[2]):
+        raise CalibrationError(f"{path}: {names['T']} = {np.round(rig.T, 6).tolist()} is not "
+                               "mostly along x: a side-by-side rig is expected")
+    if rig.K1[0, 0] * norm * 256 > FLOAT32_MAX:
+        raise CalibrationError(f"{path}: {names['T']} = {np.round(rig.T, 6).tolist()} is so "
+                               "long that depths overflow float32")
+    return rig
+
+
+def check_camera_matrix(path: Path, key: str, K: np.ndarray, size) -> None:
+    """Positive focal lengths, the last row (0, 0, 1), and the principal point inside the
+    image (when its size is known)."""
+    if not (K[0, 0] > 0 and K[1, 1] > 0):
+        raise CalibrationError(f"{path}: {key} has focal lengths {K[0, 0]:g}, {K[1, 1]:g}; "
+                               "both must be positive")
+    if not np.allclose(K[2], (0, 0, 1)) or K[1, 0] != 0:
+        raise CalibrationError(f"{path}: {key} is not a camera matrix [fx s cx; 0 fy cy; "
+                               "0 0 1]")
+    if size is not None and not (0 <= K[0, 2] < size[0] and 0 <= K[1, 2] < size[1]):
+        raise CalibrationError(f"{path}: {key}'s principal point ({K[0, 2]:g}, {K[1, 2]:g}) "
+                               f"is outside the {size[0]}x{size[1]} image")
+
+
+def check_rotation(path: Path, key: str, R: np.ndarray) -> None:
+    if (np.abs(R @ R.T - np.eye(3)).max() > ROTATION_TOLERANCE
+            or abs(np.linalg.det(R) - 1) > ROTATION_TOLERANCE):
+        raise CalibrationError(f"{path}: {key} is not a rotation (orthonormal with "
+                               "determinant +1)")
 
 
 def _ros_pair(left: Path, right: Path) -> RawRig:
@@ -175,28 +286,56 @@ def _ros_pair(left: Path, right: Path) -> RawRig:
         if not isinstance(data, dict) or "camera_matrix" not in data:
             raise CalibrationError(f"{path}: not a ROS camera_info file (camera_matrix ...)")
         try:
-            matrices = {key: _matrix(path, key, data[key]["data"], shape)
+            size = (_whole_number(path, "image_width", data["image_width"]),
+                    _whole_number(path, "image_height", data["image_height"]))
+            matrices = {key: _matrix(path, key, _ros_data(path, key, data[key]), shape)
                         for key, shape in (("camera_matrix", (3, 3)),
                                            ("rectification_matrix", (3, 3)),
                                            ("projection_matrix", (3, 4)))}
-            coeffs = data.get("distortion_coefficients", {"data": [0, 0, 0, 0, 0]})["data"]
+            coeffs = (_ros_data(path, "distortion_coefficients",
+                                data["distortion_coefficients"])
+                      if "distortion_coefficients" in data else [0, 0, 0, 0, 0])
             matrices["distortion"] = _matrix(path, "distortion_coefficients", coeffs,
                                              (len(coeffs),))
-            size = (int(data["image_width"]), int(data["image_height"]))
-        except (KeyError, TypeError) as exc:
+        except KeyError as exc:
             raise CalibrationError(f"{path}: missing {exc}") from None
         model = "fisheye" if data.get("distortion_model") == "equidistant" else "pinhole"
+        check_camera_matrix(path, "camera_matrix", matrices["camera_matrix"], size)
+        check_rotation(path, "rectification_matrix", matrices["rectification_matrix"])
+        projection = matrices["projection_matrix"]
+        check_camera_matrix(path, "projection_matrix", projection[:, :3], None)
         cams.append((matrices, size, model))
-    (l, size, model), (r, _, _) = cams
+    (l, size, model), (r, right_size, right_model) = cams
+    if right_size != size:
+        raise CalibrationError(f"{right}: image size {right_size[0]}x{right_size[1]} differs "
+                               f"from {left}'s {size[0]}x{size[1]}")
+    if right_model != model:
+        raise CalibrationError(f"{right}: distortion_model differs from {left}'s")
     # The pose of the right camera from the rectifications: X2 = R2^T R1 X1 + T with the
     # baseline along the rectified x axis, Tx = -fx' B in P2.
     rotation = r["rectification_matrix"].T @ l["rectification_matrix"]
     baseline = -r["projection_matrix"][0, 3] / r["projection_matrix"][0, 0]
+    if not baseline > 0:
+        raise CalibrationError(f"{right}: projection_matrix gives the baseline {baseline:g} "
+                               "(Tx = -fx B must be negative for the right camera); are the "
+                               "files swapped?")
     translation = r["rectification_matrix"].T @ np.array([-baseline, 0.0, 0.0])
-    return RawRig(K1=l["camera_matrix"], D1=l["distortion"], K2=r["camera_matrix"],
-                  D2=r["distortion"], R=rotation, T=translation, size=size, model=model,
-                  rectify=(l["rectification_matrix"], r["rectification_matrix"]),
-                  project=(l["projection_matrix"], r["projection_matrix"]))
+    rig = RawRig(K1=l["camera_matrix"], D1=l["distortion"], K2=r["camera_matrix"],
+                 D2=r["distortion"], R=rotation, T=translation, size=size, model=model,
+                 rectify=(l["rectification_matrix"], r["rectification_matrix"]),
+                 project=(l["projection_matrix"], r["projection_matrix"]))
+    return check_rig(right, rig, {"K1": f"{left}'s camera_matrix",
+                                  "K2": "camera_matrix",
+                                  "D1": f"{left}'s distortion_coefficients",
+                                  "D2": "distortion_coefficients",
+                                  "R": "rectification_matrix",
+                                  "T": "projection_matrix"})
+
+
+def _ros_data(path: Path, key: str, field):
+    if not isinstance(field, dict) or "data" not in field:
+        raise CalibrationError(f"{path}: {key} has no data: list")
+    return field["data"]
 
 
 def _kalibr(path: Path, data: dict) -> RawRig:
@@ -207,9 +346,13 @@ def _kalibr(path: Path, data: dict) -> RawRig:
             fu, fv, pu, pv = (float(v) for v in cam["intrinsics"])
             coeffs = [float(v) for v in cam["distortion_coeffs"]]
             model = cam.get("distortion_model", "radtan")
-            size = tuple(int(v) for v in cam["resolution"])
+            resolution = cam["resolution"]
         except (KeyError, TypeError, ValueError) as exc:
             raise CalibrationError(f"{path}: {name} lacks a valid {exc}") from None
+        if not isinstance(resolution, list) or len(resolution) != 2:
+            raise CalibrationError(f"{path}: {name}.resolution must be [width, height], "
+                                   f"got {resolution}")
+        size = tuple(_whole_number(path, f"{name}.resolution", [v]) for v in resolution)
         if cam.get("camera_model", "pinhole") != "pinhole":
             raise CalibrationError(f"{path}: {name}: camera_model "
                                    f"{cam.get('camera_model')} is not supported (pinhole)")
@@ -223,12 +366,28 @@ def _kalibr(path: Path, data: dict) -> RawRig:
         pose = _matrix(path, "cam1.T_cn_cnm1", data["cam1"]["T_cn_cnm1"], (4, 4))
     except KeyError:
         raise CalibrationError(f"{path}: cam1 lacks T_cn_cnm1") from None
-    (K1, D1, model, size), (K2, D2, _, _) = cams
+    (K1, D1, model, size), (K2, D2, model2, size2) = cams
+    if model2 != model:
+        raise CalibrationError(f"{path}: cam1's distortion_model {model2} differs from "
+                               f"cam0's {model}")
+    if size2 != size:
+        raise CalibrationError(f"{path}: cam1's resolution {list(size2)} differs from "
+                               f"cam0's {list(size)}")
     if model == "radtan":  # Kalibr: k1 k2 p1 p2, as OpenCV's first four
         D1, D2 = (np.concatenate([d, np.zeros(max(0, 5 - d.size))]) for d in (D1, D2))
-    return RawRig(K1=K1, D1=D1, K2=K2, D2=D2, R=pose[:3, :3].copy(), T=pose[:3, 3].copy(),
-                  size=size,
-                  model="fisheye" if model == "equidistant" else "pinhole")
+    rig = RawRig(K1=K1, D1=D1, K2=K2, D2=D2, R=pose[:3, :3].copy(), T=pose[:3, 3].copy(),
+                 size=size, model="fisheye" if model == "equidistant" else "pinhole")
+    return check_rig(path, rig, {"K1": "cam0.intrinsics", "K2": "cam1.intrinsics",
+                                 "D1": "cam0.distortion_coeffs",
+                                 "D2": "cam1.distortion_coeffs",
+                                 "R": "cam1.T_cn_cnm1 (rotation)",
+                                 "T": "cam1.T_cn_cnm1 (translation)"})
+
+
+def _opencv_reason(exc: Exception) -> str:
+    """The reason OpenCV gives, without its source file and line."""
+    text = " ".join(str(exc).split())
+    return text.split(") ", 1)[-1].split(" in function")[0][:200]
 
 
 class Rectifier:
@@ -242,6 +401,17 @@ class Rectifier:
             raise CalibrationError(f"the calibration is for {rig.size[0]}x{rig.size[1]} "
                                    f"images, these are {size[0]}x{size[1]}")
         self.size = size
+        for key, K in (("the left camera matrix", rig.K1), ("the right camera matrix", rig.K2)):
+            if not (0 <= K[0, 2] < size[0] and 0 <= K[1, 2] < size[1]):
+                raise CalibrationError(f"{key}'s principal point ({K[0, 2]:g}, {K[1, 2]:g}) "
+                                       f"is outside the {size[0]}x{size[1]} images")
+        try:
+            self._make_maps(rig, size, alpha)
+        except cv2.error as exc:
+            raise CalibrationError("OpenCV cannot rectify with this calibration "
+                                   f"({_opencv_reason(exc)})") from None
+
+    def _make_maps(self, rig: RawRig, size: tuple[int, int], alpha: float) -> None:
         if rig.rectify is not None and rig.project is not None:
             r1, r2 = rig.rectify
             p1, p2 = rig.project

@@ -130,19 +130,22 @@ class Finite(click.ParamType):
 FINITE, POSITIVE = Finite(), Finite(positive=True)
 
 
-class ConfidenceLevel(Finite):
-    """A confidence threshold in [0, 1]."""
+class FiniteRange(Finite):
+    """A finite number in [low, high] (NaN refused, unlike click.FloatRange)."""
 
-    name = "C"
+    def __init__(self, low: float, high: float, name: str = "NUMBER"):
+        super().__init__()
+        self.low, self.high, self.name = low, high, name
 
     def convert(self, value, param, ctx):
         number = super().convert(value, param, ctx)
-        if not 0 <= number <= 1:
-            self.fail(f"{number:g} is not in [0, 1]", param, ctx)
+        if not self.low <= number <= self.high:
+            self.fail(f"{number:g} is not in [{self.low:g}, {self.high:g}]", param, ctx)
         return number
 
 
-CONFIDENCE_LEVEL = ConfidenceLevel()
+CONFIDENCE_LEVEL = FiniteRange(0, 1, "C")
+ALPHA = FiniteRange(0, 1, "ALPHA")
 
 
 def one_line(exc: BaseException) -> str:
@@ -253,6 +256,46 @@ class OneLineErrors(click.Group):
         sys.exit(result if isinstance(result, int) else 0)
 
 
+def check_outputs(inputs, outputs, *, folders=()) -> None:
+    """Every output a file name in an existing, writable folder, none an existing folder,
+    and none naming an input or another output (links and ``..`` resolved): the one check
+    every command makes before its work. ``folders`` maps an output folder that is made
+    when missing to the files written in it. ``None`` entries are ignored."""
+    folders = dict(folders)
+    for path in outputs:
+        if path is not None:
+            check_writable_folder(Path(path))
+    for folder in folders:
+        check_new_folder(Path(folder))
+    files = [p for p in outputs if p is not None]
+    files += [f for written in folders.values() for f in written]
+    try:
+        io.check_distinct_paths(inputs, files)
+    except ValueError as exc:
+        raise click.ClickException(str(exc)) from None
+
+
+def check_new_folder(folder: Path) -> None:
+    """An output folder that exists or can be made: not a file, and the nearest existing
+    folder above it writable."""
+    if folder.exists() and not folder.is_dir():
+        raise click.ClickException(f"{folder}: is a file, not a folder")
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir() or not writable(existing):
+        raise click.ClickException(f"{folder}: folder '{existing}' is not writable")
+
+
+def check_outside(folder: Path, outputs, what: str) -> None:
+    """Refuse an output inside ``folder`` (a data set that is read, say)."""
+    root = Path(folder).resolve()
+    for path in outputs:
+        if path is not None and Path(path).resolve().is_relative_to(root):
+            raise click.ClickException(f"{path}: the output would write into the {what} "
+                                       f"{folder}, which is read")
+
+
 def writable(folder: Path) -> bool:
     return os.access(folder, os.W_OK)
 
@@ -261,6 +304,8 @@ def check_writable_folder(path: Path) -> None:
     folder = check_output_folder(path)
     if not writable(folder):
         raise click.ClickException(f"{path}: output folder '{folder}' is not writable")
+    if Path(path).is_dir():
+        raise click.ClickException(f"{path}: is a folder, not a file name")
 
 
 def check_output_folder(path: Path) -> Path:

@@ -5,9 +5,9 @@ from __future__ import annotations
 import click
 
 from .. import io, rig
-from .common import echo, friendly_errors, verbose, verbosity_options
+from .common import ALPHA, check_outputs, echo, friendly_errors, verbose, verbosity_options
 from .main import main
-from .run import write_rectified
+from .run import rectified_outputs, write_rectified
 
 
 @main.command()
@@ -19,7 +19,7 @@ from .run import write_rectified
                    "right.yaml).")
 @click.option("--to", "folder", type=click.Path(file_okay=False), required=True,
               help="Folder for im0.png, im1.png and calib.txt (created if missing).")
-@click.option("--alpha", type=click.FloatRange(0, 1), default=0.0, show_default=True,
+@click.option("--alpha", type=ALPHA, default=0.0, show_default=True,
               help="OpenCV's rectification alpha: 0 keeps only valid pixels, 1 every "
                    "source pixel.")
 @verbosity_options
@@ -34,8 +34,7 @@ def rectify(ctx, left, right, calib, folder, alpha):
       vsmatch rectify raw_l.png raw_r.png --calib stereo.yaml --to rectified
       vsmatch run rectified/im0.png rectified/im1.png -o d.pfm --calib rectified/calib.txt
     """
-    io.check_distinct_paths([left, right, *calib], [f"{folder}/im0.png", f"{folder}/im1.png",
-                                                    f"{folder}/calib.txt"])
+    check_outputs([left, right, *calib], [], folders=rectified_outputs(folder))
     raw_rig = rig.read_rig(calib)
     left_image, right_image = io.read_pair(left, right)
     rectifier = rig.Rectifier(raw_rig, left_image.shape[1::-1], alpha)

@@ -7,12 +7,12 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .. import confidence, geometry, io, pipeline, rig, search_range
+from .. import confidence, geometry, io, pipeline, preview, rig, search_range
 from ..confidence import DEFAULT_MIN_CONFIDENCE
 from ..config import load_config
-from .common import (CONFIDENCE_LEVEL, FINITE, MAX_DISP, POSITIVE, announce_compilation,
-                     check_png_range, check_writable_folder, config_option, echo,
-                     friendly_errors, max_memory_option, verbose, verbosity_options,
+from .common import (ALPHA, CONFIDENCE_LEVEL, FINITE, MAX_DISP, POSITIVE,
+                     announce_compilation, check_outputs, check_png_range, config_option,
+                     echo, friendly_errors, max_memory_option, verbose, verbosity_options,
                      with_budget)
 
 from .main import main
@@ -37,7 +37,7 @@ from .main import main
                    "are rectified first: an OpenCV stereoCalibrate YAML/XML, a Kalibr "
                    "camchain.yaml, or a ROS camera_info pair (--calib left.yaml --calib "
                    "right.yaml). For --depth and --cloud, and the range.")
-@click.option("--alpha", type=click.FloatRange(0, 1), default=0.0, show_default=True,
+@click.option("--alpha", type=ALPHA, default=0.0, show_default=True,
               help="Raw rigs: OpenCV's rectification alpha (0 keeps only valid pixels, "
                    "1 every source pixel).")
 @click.option("--rectified", "rectified_dir", type=click.Path(file_okay=False),
@@ -96,17 +96,18 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
             Path(confidence_path).suffix.lower() not in io.CONFIDENCE_FORMATS):
         raise click.BadParameter(f"'{confidence_path}' must end in .pfm or .png",
                                  param_hint="'--confidence'")
-    outputs = [output, depth_path, cloud_path, preview_path, confidence_path]
-    for extra in outputs[1:]:
-        if extra is not None:
-            check_writable_folder(Path(extra))
-    io.check_distinct_paths([left, right, *calib], outputs)
     raw_rig = rig.read_rig(calib) if calib and rig.is_raw_rig(calib) else None
-    camera = None if raw_rig else _calibration(calib, focal, baseline, cx, cy, doffs)
     if rectified_dir is not None and raw_rig is None:
         raise click.UsageError("--rectified needs a raw rig's --calib")
+    outputs = [output, depth_path, cloud_path, preview_path, confidence_path]
+    check_outputs([left, right, *calib], outputs, folders=rectified_outputs(rectified_dir))
+    camera = None if raw_rig else _calibration(calib, focal, baseline, cx, cy, doffs)
+    if raw_rig is not None:
+        _refuse_hand_values(calib, focal, baseline, cx, cy, doffs)
     if (depth_path or cloud_path) and camera is None and raw_rig is None:
         raise click.UsageError("--depth and --cloud need --calib, or --focal and --baseline")
+    if (depth_path or cloud_path) and camera is not None:
+        _check_depth_fits(camera, calib)
     cfg = with_budget(load_config(config), max_memory)
     # Refused before anything is decoded: a range a PNG cannot hold, an image too large.
     if max_disp is not None:
@@ -119,8 +120,10 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
         camera = rectifier.calibration()
         verbose(ctx, f"rectified with {', '.join(calib)}: f {camera.focal:.1f} px, "
                      f"baseline {camera.baseline:g}")
-        if rectified_dir is not None:
-            write_rectified(rectified_dir, left_image, right_image, camera, max_disp)
+        if depth_path or cloud_path:
+            _check_depth_fits(camera, calib)
+    elif camera is not None and calib:
+        _check_calibration_size(camera, calib[0], left_image.shape)
     width = left_image.shape[1]
     if max_disp is None and camera is not None:
         ndisp = camera.search_range_for(width)
@@ -165,6 +168,8 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
         DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence)
     with io.all_or_none():  # every output of the run, or none of them
         io.write_disparity(out, disp)
+        if rectified_dir is not None:
+            write_rectified(rectified_dir, left_image, right_image, camera, max_disp)
         if depth_path is not None:
             io.write_depth(depth_path, geometry.depth_from_disparity(metric_disp, camera))
         if cloud_path is not None:
@@ -175,7 +180,9 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
                           f"{DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence:g}"
                           f"; {int(np.isfinite(result.disparity).sum()) - len(points)} left out)")
         if preview_path is not None:
-            io.imwrite_atomic(preview_path, io.colour_disparity(disp, max_disp, min_disp))
+            io.imwrite_atomic(preview_path, preview.disparity_preview(
+                disp, result.confidence, DEFAULT_MIN_CONFIDENCE if min_confidence is None
+                else min_confidence))
         if confidence_path is not None:
             io.write_confidence(confidence_path, result.confidence)
     _report_run(ctx, result)
@@ -184,12 +191,43 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
             echo(ctx, f"wrote {path}")
 
 
+def rectified_outputs(folder) -> dict[Path, list[Path]]:
+    """The folder ``--rectified`` / ``rectify --to`` names, and the files written in it."""
+    if folder is None:
+        return {}
+    return {Path(folder): [Path(folder) / name for name in RECTIFIED_FILES]}
+
+
+RECTIFIED_FILES = ("im0.png", "im1.png", "calib.txt")
+
+
 def _check_output_path(path: Path) -> None:
     suffix = path.suffix.lower()
     if suffix not in io.DISPARITY_FORMATS:
         raise click.BadParameter(f"'{path}' must end in .pfm (float32) or .png (16-bit)",
                                  param_hint="'-o'")
-    check_writable_folder(path)
+
+
+def _refuse_hand_values(calib, focal, baseline, cx, cy, doffs) -> None:
+    """A raw rig's calibration gives the rectified camera; values by hand would be
+    ignored, so they are refused as with a calib.txt."""
+    given = [k for k, v in {"--focal": focal, "--baseline": baseline, "--cx": cx,
+                            "--cy": cy, "--doffs": doffs}.items() if v is not None]
+    if given:
+        raise click.UsageError(f"give --calib or {', '.join(given)}, not both")
+
+
+def _check_depth_fits(camera: geometry.Calibration, calib) -> None:
+    problem = camera.depth_problem()
+    if problem is not None:
+        where = calib[0] if calib else "--focal x --baseline"
+        raise click.ClickException(f"{where}: {problem}")
+
+
+def _check_calibration_size(camera: geometry.Calibration, path, shape) -> None:
+    problem = camera.size_problem(shape)
+    if problem is not None:
+        raise click.ClickException(f"{path}: {problem}")
 
 
 def _calibration(calib, focal, baseline, cx, cy, doffs) -> geometry.Calibration | None:
@@ -246,7 +284,7 @@ def write_rectified(folder, left, right, camera: geometry.Calibration,
     folder.mkdir(parents=True, exist_ok=True)
     size = left.shape[1::-1]
     with io.all_or_none():
-        io.imwrite_atomic(folder / "im0.png", left)
-        io.imwrite_atomic(folder / "im1.png", right)
-        io.write_text_atomic(folder / "calib.txt", rig.middlebury_calib_text(
+        io.imwrite_atomic(folder / RECTIFIED_FILES[0], left)
+        io.imwrite_atomic(folder / RECTIFIED_FILES[1], right)
+        io.write_text_atomic(folder / RECTIFIED_FILES[2], rig.middlebury_calib_text(
             camera, size, None if max_disp is None else max_disp + 1))
