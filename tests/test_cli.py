@@ -8,7 +8,6 @@ from click.testing import CliRunner
 from vsmatch import __version__, io
 from vsmatch.cli import main
 
-from conftest import random_pair
 
 
 def invoke(*args):

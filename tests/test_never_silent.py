@@ -1,8 +1,10 @@
 """Hostile and awkward input (issue 18): refused in one line, before the work, never
 clipped, never a traceback, never a lost or half-written file."""
 
+import os
 import struct
 import zlib
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -477,16 +479,27 @@ def test_a_cold_kernel_cache_is_announced(pair_files, tmp_path, monkeypatch):
                                      "--max-disp", 8).output
 
 
-def test_cache_is_cold_looks_in_numba_cache_dir(tmp_path, monkeypatch):
-    from vsmatch._kernels import cache_is_cold
-
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    assert cache_is_cold()
+def test_cache_is_cold_looks_where_numba_caches(tmp_path):
+    """Numba caches under NUMBA_CACHE_DIR (or ~/.cache/numba for a read-only install):
+    the check asks Numba where, and finds a kernel cached there."""
+    import subprocess
     import sys
+    script = ("from vsmatch._kernels import cache_is_cold\n"
+              "from vsmatch._kernels.aggregate import sum_along_arms\n"
+              "print(cache_is_cold(), sum_along_arms._cache.cache_path)\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+
+    def ask():
+        out = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                             text=True, check=True).stdout.split()
+        return out[0] == "True", Path(out[1])
+
+    cold, folder = ask()
+    assert cold and folder.is_relative_to(tmp_path / "numba")
     tag = f"py{sys.version_info.major}{sys.version_info.minor}"
-    (tmp_path / "x").mkdir()
-    (tmp_path / "x" / f"aggregate.sum_over_arms-24.{tag}.nbi").write_bytes(b"")
-    assert not cache_is_cold()
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / f"aggregate.sum_over_arms-24.{tag}.nbi").write_bytes(b"")
+    assert ask()[0] is False
 
 
 def test_an_impossible_memory_budget_is_a_usage_error_naming_the_option(pair_files, tmp_path):

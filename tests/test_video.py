@@ -72,6 +72,10 @@ def test_side_by_side_gives_the_same_frames(tmp_path, rng):
 def test_video_errors_are_one_line(tmp_path):
     result = invoke("video", tmp_path / "missing.avi", tmp_path / "other.avi", "-o",
                     tmp_path / "d.avi")
+    assert result.exit_code == 1 and "missing.avi: file not found" in result.output
+    (tmp_path / "text.mp4").write_text("not a video\n")
+    result = invoke("video", tmp_path / "text.mp4", tmp_path / "text.mp4", "-o",
+                    tmp_path / "d.avi")
     assert result.exit_code == 1 and "cannot open this video" in result.output
     assert invoke("video", tmp_path / "a.avi", "-o", tmp_path / "d.avi").exit_code == 2
     result = invoke("video", tmp_path / "a.avi", tmp_path / "b.avi", "-o", tmp_path / "d.gif")

@@ -58,23 +58,27 @@ class PairOutcome:
 
 def check_plan(jobs: list[PairJob]) -> None:
     """Refuse, before any work, a plan in which an output names any row's input (also
-    through links) or two rows name one output; the message names both rows."""
-    inputs = [(job, path) for job in jobs for path in (job.left, job.right)]
-    seen: dict[tuple, PairJob] = {}
-    by_name: dict[Path, PairJob] = {}
+    through links) or two rows name one output; the message names both rows. Linear in
+    the rows: each path is looked up by its resolved name and by its file on disk."""
+    inputs: dict[object, tuple[PairJob, Path]] = {}
     for job in jobs:
-        for other, path in inputs:
-            if io.same_file(job.output, path):
-                raise BatchError(f"{job.describe()}: the output {job.output} would overwrite the input "
-                                 f"{path} of {other.describe()}")
-        key = _file_key(job.output)
-        earlier = by_name.get(job.output.resolve()) or seen.get(key)
-        if earlier is not None:
-            raise BatchError(f"{job.describe()} and {earlier.describe()} both write "
-                             f"{job.output}")
-        by_name[job.output.resolve()] = job
-        if key is not None:
-            seen[key] = job
+        for path in (job.left, job.right):
+            for key in (path.resolve(), _file_key(path)):
+                if key is not None:
+                    inputs.setdefault(key, (job, path))
+    outputs: dict[object, PairJob] = {}
+    for job in jobs:
+        keys = [k for k in (job.output.resolve(), _file_key(job.output)) if k is not None]
+        for key in keys:
+            if key in inputs:
+                other, path = inputs[key]
+                raise BatchError(f"{job.describe()}: the output {job.output} would overwrite "
+                                 f"the input {path} of {other.describe()}")
+            if key in outputs:
+                raise BatchError(f"{job.describe()} and {outputs[key].describe()} both "
+                                 f"write {job.output}")
+        for key in keys:
+            outputs[key] = job
 
 
 def _file_key(path: Path) -> tuple | None:
@@ -104,6 +108,8 @@ def read_pair_list(csv_path: str | Path, default_max_disp: int | None) -> list[P
             continue
         if len(row) not in (3, 4) or not all(row[:3]):
             raise BatchError(f"{csv_path}, line {number}: expected left,right,output[,max_disp]")
+        if any("\0" in cell for cell in row):
+            raise BatchError(f"{csv_path}, line {number}: a cell holds a NUL byte")
         max_disp = default_max_disp
         if len(row) == 4 and row[3]:
             max_disp = _max_disp_cell(row[3], f"{csv_path}, line {number}")

@@ -78,7 +78,7 @@ def read_image(path: str | Path, *, max_mb: float | None = None,
         check_image_size(path, *size, max_mb=max_mb, max_megapixels=max_megapixels)
     data = np.fromfile(str(path), dtype=np.uint8)
     try:
-        with _native_stderr_silenced():
+        with native_stderr_silenced():
             image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
     except cv2.error:  # OpenCV's own limits (CV_IO_MAX_IMAGE_PIXELS), a broken header
         image = None
@@ -103,7 +103,7 @@ def read_image(path: str | Path, *, max_mb: float | None = None,
 
 
 @contextlib.contextmanager
-def _native_stderr_silenced():
+def native_stderr_silenced():
     """Keep the C libraries' own complaints (OpenCV 4's libpng: "libpng error: ...") off
     stderr while decoding: our one-line error says what went wrong. OpenCV 5 routes them
     through its logging, which the CLI silences."""

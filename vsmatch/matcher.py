@@ -15,7 +15,7 @@ import numpy as np
 
 from . import pipeline, rig, volumes
 from .config import Config, load_config
-from .geometry import Calibration, read_calibration
+from .geometry import Calibration, CalibrationError, read_calibration
 from .search_range import estimate_disparity_range
 
 #: The range is found again when more than this share of a frame's confident pixels
@@ -58,6 +58,9 @@ class StereoMatcher:
     def rectify(self, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The views as matched: rectified with the rig's maps (made on the first frame)."""
         if self._raw_rig is None:
+            problem = None if self.camera is None else self.camera.size_problem(left.shape)
+            if problem is not None:
+                raise CalibrationError(problem)
             return left, right
         if self._rectifier is None:
             self._rectifier = rig.Rectifier(self._raw_rig, left.shape[1::-1], self._alpha)

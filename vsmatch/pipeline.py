@@ -48,9 +48,14 @@ def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
                              f"got shape {getattr(image, 'shape', None)}")
         if image.dtype != np.uint8:
             raise ValueError(f"{name} image must be uint8, got {image.dtype}")
-    if left.shape != right.shape:
+    if left.shape[:2] != right.shape[:2]:
         raise ValueError(f"left and right images differ in size: {left.shape[1]}x{left.shape[0]}"
                          f" and {right.shape[1]}x{right.shape[0]}")
+    if left.ndim != right.ndim:
+        kinds = ["grey (H, W)" if image.ndim == 2 else "colour (H, W, 3)"
+                 for image in (left, right)]
+        raise ValueError(f"the left image is {kinds[0]} and the right {kinds[1]}: give "
+                         "both grey or both colour")
     height, width = left.shape[:2]
     if width < cfg.cost.census_width or height < cfg.cost.census_height:
         raise ValueError(f"images of {width}x{height} are smaller than the census window "

@@ -11,15 +11,16 @@ KERNEL_OPTIONS = dict(parallel=True, cache=True, nogil=True, error_model="numpy"
 
 def cache_is_cold() -> bool:
     """True when no compiled kernel is cached yet for this Python, so the first run
-    compiles them all (20-40 s). Numba keeps its cache beside the sources, or under
-    NUMBA_CACHE_DIR."""
-    import os
+    compiles them all (20-40 s). Numba itself says where it caches: beside the sources,
+    or under ~/.cache/numba when the package is installed read-only, or NUMBA_CACHE_DIR."""
     import sys
     from pathlib import Path
 
+    from .aggregate import sum_along_arms
+
     tag = f"py{sys.version_info.major}{sys.version_info.minor}"
-    custom = os.environ.get("NUMBA_CACHE_DIR")
-    if custom:
-        return not any(Path(custom).rglob(f"aggregate.*.{tag}.nbi"))
-    folder = Path(__file__).parent / "__pycache__"
+    try:
+        folder = Path(sum_along_arms._cache.cache_path)
+    except AttributeError:  # a Numba without this cache attribute: assume compiled
+        return False
     return not any(folder.glob(f"aggregate.*.{tag}.nbi"))

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import click
 
-from .. import io
+from .. import datasets, io
 from ..config import bundled_config_names, load_config
-from .common import (check_output_folder, data_root_option, echo, friendly_errors,
+from .common import (check_outputs, check_outside, data_root_option, echo, friendly_errors,
                      verbosity_options)
 
 from .main import main
@@ -52,9 +51,13 @@ def bench_command(ctx, data_root, configs, rounds, no_cold, no_size, json_path, 
     """
     from .. import bench
 
-    for path in (json_path, plot_path):
-        if path is not None:
-            check_output_folder(Path(path))
+    check_outputs([], [json_path, plot_path])
+    for name in {*bench.STANDARD_DATASETS, *(entry[1] for entry in bench.SIZE_SERIES)}:
+        try:
+            folder = datasets.dataset_folder(name, data_root)
+        except datasets.DatasetError:
+            continue  # one that is not there is not read (or fails on its own later)
+        check_outside(folder, [json_path, plot_path], "data set")
     if plot_path is not None and not plot_path.lower().endswith(".png"):
         raise click.BadParameter("the plot is written as PNG: name a .png file",
                                  param_hint="--plot")

@@ -6,6 +6,7 @@ from __future__ import annotations
 import functools
 import math
 import os
+import signal
 import sys
 from pathlib import Path
 
@@ -31,6 +32,9 @@ class Terminated(KeyboardInterrupt):
 
 
 def on_sigterm(signum, frame):
+    # A second SIGTERM while the first unwinds (or while Python shuts its threads down)
+    # would raise inside that clean-up and print a traceback: it is ignored from here on.
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     raise Terminated()
 
 

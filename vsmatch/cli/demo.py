@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from .. import evaluation, io, pipeline, synthetic
-from .common import config_option, echo, friendly_errors, verbosity_options
+from .common import announce_compilation, config_option, echo, friendly_errors, verbosity_options
 
 from .main import main
 
@@ -26,6 +26,7 @@ def demo(ctx, out_dir, config):
     (bad pixels red), and prints the bad-pixel percentage. Nothing is downloaded.
     """
     pair = synthetic.make_pair()
+    announce_compilation(ctx)
     disp = pipeline.match(pair.left, pair.right, max_disp=pair.max_disp, config=config)
     folder = Path(out_dir)
     folder.mkdir(parents=True, exist_ok=True)

@@ -10,8 +10,8 @@ import click
 from .. import datasets, evaluation, io
 from ..config import load_config
 from ..peers import PEER_METHODS
-from .common import (check_output_folder, data_root_option, echo, friendly_errors, verbose,
-                     verbosity_options)
+from .common import (check_outputs, check_outside, data_root_option, echo, friendly_errors,
+                     verbose, verbosity_options)
 
 from .main import main
 
@@ -74,17 +74,17 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, figure_pa
         # Loading each config first fails before any work on a bad one.
         configs = {m: m if m in PEER_METHODS else load_config(m)
                    for m in (methods or ("census", "paper", "default"))}
-    for path in (json_path, figure_path):
-        if path is not None:
-            check_output_folder(Path(path))
     if figure_path is not None and Path(figure_path).suffix.lower() != ".png":
         raise click.BadParameter(f"'{figure_path}' must end in .png", param_hint="'--figure'")
-    io.check_distinct_paths([], [json_path, figure_path])
+    check_outputs([], [json_path, figure_path])
     try:
         evaluation.scoring_for(dataset, threshold)
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="'--threshold'") from None
     levels = _parse_levels(noise)
+    # Nothing is written into the data set that is read.
+    check_outside(datasets.dataset_folder(dataset, data_root),
+                  [json_path, figure_path, out_dir], "data set")
     scenes = datasets.load_dataset(dataset, data_root)
     ranges = evaluation.scene_ranges(scenes, auto=range_mode == "auto")
     if range_mode == "auto":

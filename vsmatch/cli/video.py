@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import time
 from pathlib import Path
 
@@ -11,8 +12,8 @@ import numpy as np
 
 from .. import io
 from ..matcher import StereoMatcher
-from .common import (MAX_DISP, check_writable_folder, config_option, echo, friendly_errors,
-                     verbose, verbosity_options)
+from .common import (MAX_DISP, check_outside, check_outputs, config_option, echo,
+                     friendly_errors, verbose, verbosity_options)
 from .main import main
 
 #: Output containers and the codec OpenCV writes them with here.
@@ -20,29 +21,100 @@ VIDEO_CODECS = {".avi": "MJPG", ".mp4": "mp4v"}
 
 
 def _open(source: str) -> cv2.VideoCapture:
-    """A video file, or a camera index (``0``, ``1``, ...)."""
-    capture = cv2.VideoCapture(int(source)) if source.isdigit() else cv2.VideoCapture(source)
+    """A video file, or a camera index (``0``, ``1``, ...). FFmpeg's own complaints
+    ("moov atom not found") are kept off stderr: our one line says what is wrong."""
+    camera = source.isdigit()
+    if not camera and not Path(source).is_file():
+        raise click.ClickException(f"{source}: file not found")
+    with io.native_stderr_silenced():
+        capture = cv2.VideoCapture(int(source)) if camera else cv2.VideoCapture(source)
     if not capture.isOpened():
-        what = "camera" if source.isdigit() else "video"
+        what = "camera" if camera else "video"
         raise click.ClickException(f"{source}: cannot open this {what}")
     return capture
 
 
-def _frames(left: cv2.VideoCapture, right: cv2.VideoCapture | None):
-    """Pairs of frames until either source ends; one side-by-side source is split."""
-    while True:
-        ok, frame = left.read()
-        if not ok:
-            return
-        if right is None:
-            half = frame.shape[1] // 2
-            yield (np.ascontiguousarray(frame[:, :half]),
-                   np.ascontiguousarray(frame[:, half:2 * half]))
-            continue
-        ok, other = right.read()
-        if not ok:
-            return
-        yield frame, other
+class FramePairs:
+    """Pairs of frames until a source ends; one side-by-side source is split. Counts
+    the frames each source gave, and after the end those left without a partner."""
+
+    def __init__(self, names: list[str], sources: list[cv2.VideoCapture]):
+        self.names, self.sources = names, sources
+        self.read = [0] * len(sources)
+
+    def _next(self, k: int):
+        with io.native_stderr_silenced():
+            ok, frame = self.sources[k].read()
+        if ok:
+            self.read[k] += 1
+        return frame if ok else None
+
+    def __iter__(self):
+        while True:
+            frame = self._next(0)
+            if frame is None:
+                return
+            if len(self.sources) == 1:
+                half = frame.shape[1] // 2
+                yield (np.ascontiguousarray(frame[:, :half]),
+                       np.ascontiguousarray(frame[:, half:2 * half]))
+                continue
+            other = self._next(1)
+            if other is None:
+                return
+            yield frame, other
+
+    def unpaired(self) -> str | None:
+        """After the pairs ran out: the frames one source has beyond the other's end,
+        counted to the end of a file (a camera gives one more at least), or None."""
+        if len(self.sources) == 1:
+            return None
+        longer = 0 if self.read[0] > self.read[1] else 1
+        if self.read[0] == self.read[1]:  # the left ended: has the right more?
+            longer = 1
+            if self._next(1) is None:
+                return None
+        if not self.names[longer].isdigit():
+            while self._next(longer) is not None:
+                pass
+        a, b = self.read
+        extra = abs(a - b)
+        return (f"{self.names[0]} has {a} frames, {self.names[1]} {b}: {extra} frame"
+                f"{'s' if extra > 1 else ''} without a partner, counted as failed")
+
+
+def write_video(path: str, pictures, fps: float, codec: str) -> int:
+    """Write ``pictures`` (BGR, one size) to the video ``path``; the number written. The
+    file is opened again and its frames counted: a writer that could not write (a full
+    disk) is an OSError, never a short video."""
+    writer, count = None, 0
+    try:
+        for picture in pictures:
+            if writer is None:
+                writer = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*codec), fps,
+                                         picture.shape[1::-1])
+                if not writer.isOpened():
+                    raise OSError("OpenCV cannot write this video")
+            writer.write(picture)
+            count += 1
+    finally:
+        if writer is not None:
+            writer.release()
+    if count:
+        written = video_frame_count(path)
+        if written != count:
+            raise OSError(f"the file holds {written} of {count} frames (is the disk full?)")
+    return count
+
+
+def video_frame_count(path: str) -> int:
+    """The frames a video file holds, as its header says (0 when it cannot be read)."""
+    with io.native_stderr_silenced():
+        capture = cv2.VideoCapture(path)
+        try:
+            return int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) if capture.isOpened() else 0
+        finally:
+            capture.release()
 
 
 @main.command()
@@ -54,7 +126,10 @@ def _frames(left: cv2.VideoCapture, right: cv2.VideoCapture | None):
               help="LEFT holds both views side by side (left half, right half).")
 @click.option("--frames", "frames_dir", type=click.Path(file_okay=False), default=None,
               help="Also write each frame's disparity and confidence here "
-                   "(NNNNNN.pfm, NNNNNN_confidence.pfm).")
+                   "(NNNNNN.pfm, NNNNNN_confidence.pfm); a folder that holds anything is "
+                   "refused unless --overwrite.")
+@click.option("--overwrite", is_flag=True,
+              help="Replace a --frames folder that holds files, as a whole.")
 @click.option("--max-disp", type=MAX_DISP, default=None,
               help="Largest disparity searched; default: the calibration's, else found "
                    "from the first frame (and again when the scene comes closer).")
@@ -67,10 +142,12 @@ def _frames(left: cv2.VideoCapture, right: cv2.VideoCapture | None):
 @verbosity_options
 @click.pass_context
 @friendly_errors
-def video(ctx, left, right, output, side_by_side, frames_dir, max_disp, min_disp, calib,
-          max_frames, config):
+def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_disp,
+          min_disp, calib, max_frames, config):
     """Match the frames of two videos (or of one side-by-side video, or of two cameras
     given by index) and write the disparity as a colour video.
+
+    Frames of one video without a partner in the other are counted as failed (exit 1).
 
     \b
     Example:
@@ -84,51 +161,56 @@ def video(ctx, left, right, output, side_by_side, frames_dir, max_disp, min_disp
         raise click.BadParameter(f"'{output}' must end in .avi or .mp4", param_hint="'-o'")
     if side_by_side == (right is not None):
         raise click.UsageError("give LEFT and RIGHT, or one LEFT with --side-by-side")
-    check_writable_folder(out)
+    names = [left] + ([] if right is None else [right])
+    inputs = [n for n in names if not n.isdigit()] + list(calib)
+    check_outputs(inputs, [output], folders={frames_dir: []} if frames_dir else {})
+    if frames_dir is not None:  # the folder is replaced as a whole: nothing else in it
+        check_outside(Path(frames_dir), [*inputs, output], "--frames folder")
     stereo = StereoMatcher(max_disp=max_disp, min_disp=min_disp, config=config,
                            calib=list(calib) or None)
-    sources = [_open(left)] + ([] if right is None else [_open(right)])
+    sources = [_open(name) for name in names]
     fps = sources[0].get(cv2.CAP_PROP_FPS) or 10.0
-    if frames_dir is not None:
-        Path(frames_dir).mkdir(parents=True, exist_ok=True)
-    writer, tmp, count, start = None, None, 0, time.perf_counter()
+    pairs = FramePairs(names, sources)
+    count, start = 0, time.perf_counter()
     quiet = ctx.find_root().obj.get("quiet")
-    try:
+
+    def pictures(frames_folder: Path | None):
+        nonlocal count
         with tqdm(total=max_frames, disable=quiet, unit="frame", leave=False) as bar:
-            for frame_l, frame_r in _frames(sources[0], sources[1] if right else None):
+            for frame_l, frame_r in pairs:
                 result = stereo.result(frame_l, frame_r)
                 low, high = stereo.range or result.search_range
-                picture = io.colour_disparity(result.disparity, high, low)
-                if writer is None:
-                    # Written beside the output under a temporary name, renamed at the end.
-                    tmp = out.with_name(f".{out.stem}.partial{out.suffix}")
-                    writer = cv2.VideoWriter(str(tmp), cv2.VideoWriter_fourcc(
-                        *VIDEO_CODECS[out.suffix.lower()]), fps, picture.shape[1::-1])
-                    if not writer.isOpened():
-                        raise click.ClickException(f"{output}: OpenCV cannot write this video")
-                writer.write(picture)
-                if frames_dir is not None:
-                    io.write_disparity(Path(frames_dir) / f"{count:06d}.pfm", result.disparity)
-                    io.write_confidence(Path(frames_dir) / f"{count:06d}_confidence.pfm",
+                yield io.colour_disparity(result.disparity, high, low)
+                if frames_folder is not None:
+                    io.write_disparity(frames_folder / f"{count:06d}.pfm", result.disparity)
+                    io.write_confidence(frames_folder / f"{count:06d}_confidence.pfm",
                                         result.confidence)
                 count += 1
                 bar.update(1)
                 bar.set_postfix_str(f"{count / (time.perf_counter() - start):.2f} fps")
                 if max_frames is not None and count >= max_frames:
-                    break
-        if writer is None:
-            raise click.ClickException(f"{left}: no frame could be read")
-        writer.release()
-        tmp.replace(out)
+                    return
+
+    try:
+        with io.all_or_none():  # the video and the frames folder together, or neither
+            staged = (io.staged_folder(frames_dir, overwrite=overwrite) if frames_dir
+                      else contextlib.nullcontext(None))
+            with staged as frames_folder:
+                io.write_atomic(out, lambda tmp: _write_or_refuse(
+                    tmp, pictures(frames_folder), fps, out, left))
     finally:
         for source in sources:
             source.release()
-        if writer is not None:
-            writer.release()
-        if tmp is not None and tmp.exists():
-            tmp.unlink()
+    unpaired = None if max_frames is not None and count >= max_frames else pairs.unpaired()
     seconds = time.perf_counter() - start
     verbose(ctx, f"{count} frames in {seconds:.1f} s ({count / seconds:.2f} fps), "
                  f"disparities {stereo.range[0]}..{stereo.range[1]}"
                  if stereo.range else f"{count} frames in {seconds:.1f} s")
     echo(ctx, f"wrote {output} ({count} frames)")
+    if unpaired is not None:
+        raise click.ClickException(unpaired)
+
+
+def _write_or_refuse(tmp: str, pictures, fps: float, out: Path, left: str) -> None:
+    if write_video(tmp, pictures, fps, VIDEO_CODECS[out.suffix.lower()]) == 0:
+        raise click.ClickException(f"{left}: no frame could be read")
