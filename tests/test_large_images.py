@@ -131,6 +131,37 @@ def test_refine_blocks_do_not_change_the_result(teddy, monkeypatch):
     assert whole.tobytes() == blocks.tobytes()
 
 
+def test_band_scanline_runs_in_stripes_within_the_budget(teddy, monkeypatch):
+    """The scanline over the bands in stripes (issue 26, item 23): as many as the budget
+    needs, the same bytes when one holds the level, near one piece otherwise."""
+    s = teddy
+    cfg = load_config(None)
+    assert cfg.pyramid.scanline and cfg.scanline.enabled
+    _, coarse_max = pyramid.level_down(s.left.shape[1], s.max_disp)
+    coarse = pipeline.run(pyramid.downsample(s.left), pyramid.downsample(s.right),
+                          max_disp=coarse_max, config=cfg)
+    calls = []
+    original = optimization.band_scanline
+    monkeypatch.setattr(optimization, "band_scanline",
+                        lambda agg, *a, **k: calls.append(agg.size) or original(agg, *a, **k))
+    args = (s.left, s.right, coarse.disparity, coarse.labels, s.max_disp)
+    whole = pyramid.refine(*args, cfg)
+    roomy = config_from_dict({"memory": {"max_mb": 4096}}, base=cfg)
+    assert pyramid.refine(*args, roomy).tobytes() == whole.tobytes()
+    calls.clear()
+    small = config_from_dict({"memory": {"max_mb": 16, "overlap": 24}}, base=cfg)
+    # The budget's rows: the fullest row's candidates (8 bytes each) and 32 bytes a pixel.
+    lo, hi = np.zeros((40, 100), np.int32), np.full((40, 100), 9, np.int32)
+    assert pyramid.band_stripe_rows(lo, hi, 50, small) == 16 * 2**20 // (100 * (11 * 8 + 32))
+    monkeypatch.setattr(pyramid, "band_stripe_rows", lambda *a: 120)
+    cut = pyramid.refine(*args, small)
+    assert len(calls) == 6  # 375 rows in stripes of 120 with 24 rows on either side
+    assert max(calls) < whole.size * 2
+    with np.errstate(invalid="ignore"):
+        differ = ~((cut == whole) | (np.abs(cut - whole) <= 0.5))
+    assert 0 < differ.mean() < 0.02
+
+
 def _band_search_by_hand(volume, arms, lo, hi):
     """Cross sums of the full cost volume, best d in lo..hi, parabola: slow and plain."""
     height, width, n_disp = volume.shape

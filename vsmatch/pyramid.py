@@ -126,8 +126,9 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
     in blocks of :data:`REFINE_ROWS` rows with a margin that holds every cross and census
     window of the block, so the result is the same as in one piece. With
     ``pyramid.scanline`` (and the scanline stage on), the blocks keep every band's
-    aggregated costs and the scanline optimisation runs over them on the whole level
-    before the winners are taken (``optimization.band_scanline``).
+    aggregated costs and the scanline optimisation runs over them before the winners are
+    taken (``optimization.band_scanline``), in stripes within ``memory.max_mb``
+    (:func:`band_stripe_rows`).
     """
     if cfg.noise.adapt:
         cfg, _ = noise.adapt_to_pair(cfg, left, right)
@@ -145,42 +146,101 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
     n_disp = int(max_disp) + 1
     out = np.empty((height, width), dtype=np.float32)
     lo_all, hi_all = search_bands(low, high, max_disp, cfg.pyramid.band)
-    optimise = cfg.pyramid.scanline and cfg.scanline.enabled
-    if optimise:  # every band's aggregated costs, for the scanline over the whole level
-        first_all, last_all = candidate_range(lo_all, hi_all, n_disp)
-        sizes = np.maximum(last_all - first_all + 1, 0)
-        agg_at = (np.cumsum(sizes) - sizes.ravel()).reshape(sizes.shape)
-        agg = np.empty(int(sizes.sum()), dtype=np.float32)
+    del low, high
+    blocks = _BandBlocks(left, right, arms_all, lo_all, hi_all, n_disp, cfg, margin)
+    if cfg.pyramid.scanline and cfg.scanline.enabled:
+        _refine_with_scanline(blocks, left, right, cfg, out)
+        return out
     for top in range(0, height, REFINE_ROWS):
         bottom = min(height, top + REFINE_ROWS)
-        y0, y1 = max(0, top - margin), min(height, bottom + margin)
-        views = left[y0:y1], right[y0:y1]
-        grey = [to_grey(v) for v in views]
-        # The magnitude for the cost; the arms come from below (arms_from_below).
-        grads = [sensitivity.visual_sensitivity(g, direction=False)[0] for g in grey]
-        census = [cost.census_for(g, cfg.cost) for g in grey]
-        # The margin keeps the core rows' arms inside the block.
-        arms = np.ascontiguousarray(arms_all[:, y0:y1])
-        terms = cost.cost_terms(views[0], views[1], census[0], census[1], grads[0], grads[1],
-                                cfg.cost)
-        # Only the core rows are searched: margin rows get an empty band.
-        lo_block, hi_block = lo_all[y0:y1].copy(), hi_all[y0:y1].copy()
-        for rows in (slice(0, top - y0), slice(bottom - y0, None)):
-            lo_block[rows], hi_block[rows] = 1, 0
-        if optimise:
-            store, starts = band_store(terms, lo_block, hi_block, n_disp, support)
-            first, last = candidate_range(lo_block, hi_block, n_disp)
-            band_aggregate(store, starts, arms, first, last, agg_at[y0:y1], agg)
-            continue
+        terms, arms, lo_block, hi_block, y0 = blocks.block(top, bottom)
         block = search_in_bands(terms, arms, lo_block, hi_block, n_disp, support,
                                 bool(cfg.subpixel.enabled))
         out[top:bottom] = block[top - y0:bottom - y0]
-    if optimise:
-        sums = optimization.band_scanline(agg, agg_at, first_all, lo_all, hi_all, n_disp, left,
-                                          right, cfg.scanline)
-        band_winners(agg, sums, agg_at, first_all, last_all, lo_all, hi_all,
-                     bool(cfg.subpixel.enabled), out)
     return out
+
+
+class _BandBlocks:
+    """What the band search of rows ``top .. bottom`` needs: the cost terms and arms of
+    those rows with a margin that holds every cross and census window, and the bands,
+    empty on the margin rows (they are searched with their own block)."""
+
+    def __init__(self, left, right, arms_all, lo_all, hi_all, n_disp, cfg, margin):
+        self.left, self.right, self.arms_all = left, right, arms_all
+        self.lo_all, self.hi_all, self.n_disp = lo_all, hi_all, n_disp
+        self.cfg, self.margin = cfg, margin
+
+    def block(self, top: int, bottom: int):
+        height = self.left.shape[0]
+        y0, y1 = max(0, top - self.margin), min(height, bottom + self.margin)
+        views = self.left[y0:y1], self.right[y0:y1]
+        grey = [to_grey(v) for v in views]
+        # The magnitude for the cost; the arms come from below (arms_from_below).
+        grads = [sensitivity.visual_sensitivity(g, direction=False)[0] for g in grey]
+        census = [cost.census_for(g, self.cfg.cost) for g in grey]
+        # The margin keeps the core rows' arms inside the block.
+        arms = np.ascontiguousarray(self.arms_all[:, y0:y1])
+        terms = cost.cost_terms(views[0], views[1], census[0], census[1], grads[0], grads[1],
+                                self.cfg.cost)
+        # Only the core rows are searched: margin rows get an empty band.
+        lo_block, hi_block = self.lo_all[y0:y1].copy(), self.hi_all[y0:y1].copy()
+        for rows in (slice(0, top - y0), slice(bottom - y0, None)):
+            lo_block[rows], hi_block[rows] = 1, 0
+        return terms, arms, lo_block, hi_block, y0
+
+
+#: Bytes a row of a band-scanline stripe takes per pixel besides its candidates' 8 (the
+#: aggregated cost and the path sum, float32): the candidate range, sizes and offsets
+#: (int64).
+BAND_PIXEL_BYTES = 32
+
+
+def band_stripe_rows(lo: np.ndarray, hi: np.ndarray, n_disp: int, cfg: Config) -> int:
+    """The most rows a stripe of the band scanline may take within ``memory.max_mb``
+    (its fullest rows' candidates counted); at least enough for two overlaps and 16 rows."""
+    first, last = candidate_range(lo, hi, n_disp)
+    cells = np.maximum(last - first + 1, 0).sum(axis=1).max()
+    row_bytes = 8 * int(cells) + BAND_PIXEL_BYTES * lo.shape[1]
+    return max(cfg.memory.max_mb * 2**20 // row_bytes, 2 * cfg.memory.overlap + 16)
+
+
+def _refine_with_scanline(blocks: _BandBlocks, left: np.ndarray, right: np.ndarray,
+                          cfg: Config, out: np.ndarray) -> None:
+    """The band search with the scanline optimisation over the bands, in horizontal
+    stripes that fit ``memory.max_mb`` (``pipeline.stripe_layout``: each stripe's core
+    kept, ``memory.overlap`` rows on either side dropped): a stripe's bands aggregated
+    block by block, the scanline over the whole stripe, then the winners. One stripe when
+    the level fits, the same as the whole level in one piece."""
+    from .pipeline import stripe_layout
+
+    height, width = left.shape[:2]
+    lo_all, hi_all, n_disp = blocks.lo_all, blocks.hi_all, blocks.n_disp
+    rows = band_stripe_rows(lo_all, hi_all, n_disp, cfg)
+    for first_row, stop, core_first, core_stop in stripe_layout(height, rows,
+                                                                cfg.memory.overlap):
+        lo, hi = lo_all[first_row:stop], hi_all[first_row:stop]
+        first, last = candidate_range(lo, hi, n_disp)
+        sizes = np.maximum(last - first + 1, 0)
+        agg_at = (np.cumsum(sizes) - sizes.ravel()).reshape(sizes.shape)
+        agg = np.empty(int(sizes.sum()), dtype=np.float32)
+        for top in range(first_row, stop, REFINE_ROWS):
+            bottom = min(stop, top + REFINE_ROWS)
+            terms, arms, lo_block, hi_block, y0 = blocks.block(top, bottom)
+            store, starts = band_store(terms, lo_block, hi_block, n_disp, cfg.pyramid.support)
+            first_block, last_block = candidate_range(lo_block, hi_block, n_disp)
+            # Offsets of the core rows in this stripe's store; the margin rows have none.
+            at_block = np.zeros(lo_block.shape, dtype=np.int64)
+            at_block[top - y0:bottom - y0] = agg_at[top - first_row:bottom - first_row]
+            band_aggregate(store, starts, arms, first_block, last_block, at_block, agg)
+            del store, starts
+        sums = optimization.band_scanline(agg, agg_at, first, lo, hi, n_disp,
+                                          left[first_row:stop], right[first_row:stop],
+                                          cfg.scanline)
+        part = np.empty(lo.shape, dtype=np.float32)
+        band_winners(agg, sums, agg_at, first, last, lo, hi, bool(cfg.subpixel.enabled),
+                     part)
+        out[core_first:core_stop] = part[core_first - first_row:core_stop - first_row]
+        del agg, sums
 
 
 def arms_from_below(view: np.ndarray, cfg: ArmsConfig) -> np.ndarray:
