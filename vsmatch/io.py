@@ -238,21 +238,30 @@ def _replace(tmp: str | Path, path: Path) -> None:
 
 
 #: Signals whose delivery is put off while the outputs of a block are renamed into place.
-_DEFERRED_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+_DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 @contextlib.contextmanager
 def _signals_deferred():
-    """SIGINT and SIGTERM held back (delivered when the block ends), so that a run is
-    stopped before or after its renames, never between two of them."""
+    """SIGINT and SIGTERM held back and delivered when the block ends, so that a run is
+    stopped before or after its renames, never between two of them. (Masking the signals
+    would not do: the kernel hands them to a worker thread that does not mask them.)"""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    before = signal.pthread_sigmask(signal.SIG_BLOCK, _DEFERRED_SIGNALS)
+    pending: list[int] = []
+    saved = {}
+    for number in _DEFERRED_SIGNALS:
+        handler = signal.getsignal(number)
+        if callable(handler) or handler == signal.SIG_DFL:
+            saved[number] = signal.signal(number, lambda n, frame: pending.append(n))
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+        for number, handler in saved.items():
+            signal.signal(number, handler)
+        if pending:
+            signal.raise_signal(pending[0])
 
 
 @contextlib.contextmanager

@@ -99,24 +99,40 @@ def _read(path: Path) -> str:
         raise CalibrationError(f"{path}: cannot read the calibration ({exc})") from None
 
 
-#: YAML events a calibration file may hold: a camchain of two cameras has a few hundred.
+#: YAML nodes a calibration file may hold, its aliases expanded: a camchain of two
+#: cameras has about a hundred.
 MAX_CALIBRATION_NODES = 20_000
 
 
 def _yaml(path: Path, text: str):
-    """The YAML document, refusing aliases (``*name``; expanded they can take gigabytes
-    from a few hundred bytes) and more nodes than any calibration holds, before building
-    anything."""
+    """The YAML document. Its size with every alias expanded is counted on the parsed
+    node graph first (aliases point to one node there): a few hundred bytes of nested
+    aliases expand to gigabytes, and such a file is refused before anything is built."""
     try:
-        for count, event in enumerate(yaml.parse(text, Loader=yaml.SafeLoader)):
-            if isinstance(event, yaml.AliasEvent):
-                raise CalibrationError(f"{path}: YAML aliases (*{event.anchor}) are not "
-                                       "accepted in a calibration file")
-            if count > MAX_CALIBRATION_NODES:
-                raise CalibrationError(f"{path}: more YAML nodes than a calibration holds")
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+        if root is not None and _expanded_size(root, {}) > MAX_CALIBRATION_NODES:
+            raise CalibrationError(f"{path}: more YAML nodes than a calibration holds "
+                                   f"(over {MAX_CALIBRATION_NODES} with its aliases "
+                                   "expanded)")
         return yaml.safe_load(text)
     except (yaml.YAMLError, RecursionError):
         raise CalibrationError(f"{path}: not valid YAML") from None
+
+
+def _expanded_size(node, sizes: dict) -> int:
+    """Nodes under ``node`` with its aliases expanded, each shared node counted once
+    per use but walked once."""
+    if id(node) in sizes:
+        return sizes[id(node)]
+    if isinstance(node, yaml.SequenceNode):
+        size = 1 + sum(_expanded_size(child, sizes) for child in node.value)
+    elif isinstance(node, yaml.MappingNode):
+        size = 1 + sum(_expanded_size(k, sizes) + _expanded_size(v, sizes)
+                       for k, v in node.value)
+    else:
+        size = 1
+    sizes[id(node)] = size
+    return size
 
 
 def _matrix(path: Path, key: str, value, shape: tuple[int, ...]) -> np.ndarray:
@@ -246,13 +262,13 @@ def check_rig(path: Path, rig: RawRig, names: dict[str, str]) -> RawRig:
                 f"{path}: {names[d]} has {D.size} distortion coefficients; the "
                 f"{rig.model} model takes {' or '.join(str(n) for n in allowed)}")
     check_rotation(path, names["R"], rig.R)
-    norm = float(np.linalg.norm(rig.T))
-    if not norm > 0:
+    longest = float(np.abs(rig.T).max())
+    if not longest > 0:
         raise CalibrationError(f"{path}: {names['T']} is zero: the cameras are at one place")
     if abs(rig.T[0]) <= math.hypot(rig.T[1], rig.T[2]):
         raise CalibrationError(f"{path}: {names['T']} = {np.round(rig.T, 6).tolist()} is not "
                                "mostly along x: a side-by-side rig is expected")
-    if rig.K1[0, 0] * norm * 256 > FLOAT32_MAX:
+    if rig.K1[0, 0] * longest * 256 > FLOAT32_MAX:
         raise CalibrationError(f"{path}: {names['T']} = {np.round(rig.T, 6).tolist()} is so "
                                "long that depths overflow float32")
     return rig

@@ -145,6 +145,13 @@ def estimate_disparity_range(left: np.ndarray, right: np.ndarray,
     return DisparityRange(min_disp, max_disp, sparse, dense, int(disparities.size))
 
 
+#: What rows that disagree mean for a pair given as rectified.
+NOT_RECTIFIED = "the pair is not rectified; rectify it first (--calib with the rig's calibration)"
+#: ... and for a raw rig's pair after its rectification.
+STILL_NOT_RECTIFIED = ("after rectifying with the rig's calibration: are the views swapped "
+                       "(left first), or is the calibration of another rig?")
+
+
 def pair_problem(matches: FeatureMatches) -> str | None:
     """Why the pair cannot be matched as it is (swapped views, rows that disagree), or
     None. Too few matches to tell: None."""
@@ -153,8 +160,7 @@ def pair_problem(matches: FeatureMatches) -> str | None:
     offset = float(np.median(np.abs(matches.dy)))
     if offset > ROW_OFFSET_LIMIT * matches.factor:
         return (f"the views' rows disagree by {offset:.1f} px (median over "
-                f"{matches.dy.size} feature matches): the pair is not rectified; rectify "
-                "it first (--calib with the rig's calibration)")
+                f"{matches.dy.size} feature matches): {NOT_RECTIFIED}")
     disparities = matches.consistent_disparities()
     if disparities.size >= MIN_MATCHES:
         negative = float(np.mean(disparities < -0.5))

@@ -58,8 +58,9 @@ from .main import main
 @click.option("--max-depth", type=POSITIVE, default=None,
               help="Leave points farther than this out of the cloud.")
 @click.option("--preview", "preview_path", type=click.Path(dir_okay=False), default=None,
-              help="Also write the disparity as a colour image here (.png or .jpg; "
-                   "invalid pixels black).")
+              help="Also write the disparity as a colour image here (.png or .jpg): colours "
+                   "over the disparities present with a colour bar, pixels below the "
+                   "confidence threshold dimmed and hatched, invalid pixels black.")
 @click.option("--confidence", "confidence_path", type=click.Path(dir_okay=False),
               default=None, help="Also write each pixel's confidence in [0, 1] here (.pfm "
               "float32, or .png 16-bit scaled to 0..65535).")
@@ -136,7 +137,7 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
         raise click.BadParameter(f"{max_disp} must be less than the image width ({width})",
                                  param_hint="'--max-disp'")
     if max_disp is None:
-        found = _estimate_range(left_image, right_image, left)
+        found = _estimate_range(left_image, right_image, left, raw_rig is not None)
         verbose(ctx, f"{left}: {found.describe()}")
         min_disp = found.min_disp if min_disp is None else min_disp
         max_disp = max(found.max_disp, min_disp + 1)
@@ -145,7 +146,7 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
         problem = search_range.pair_problem(search_range.feature_matches(
             left_image, right_image, max_width=search_range.CHECK_WIDTH))
         if problem is not None:
-            echo(ctx, f"warning: {left}: {problem}", err=True)
+            echo(ctx, f"warning: {left}: {_for_rig(problem, raw_rig is not None)}", err=True)
     min_disp = min_disp or 0
     check_png_range(out, min_disp, max_disp)
     try:
@@ -250,11 +251,18 @@ def _calibration(calib, focal, baseline, cx, cy, doffs) -> geometry.Calibration 
                                 doffs=doffs or 0.0)
 
 
-def _estimate_range(left_image, right_image, name):
+def _estimate_range(left_image, right_image, name, rectified_here: bool):
     try:
         return search_range.estimate_disparity_range(left_image, right_image)
     except ValueError as exc:
-        raise click.ClickException(f"{name}: {exc}") from None
+        raise click.ClickException(f"{name}: {_for_rig(str(exc), rectified_here)}") from None
+
+
+def _for_rig(problem: str, rectified_here: bool) -> str:
+    """A pair problem as said of views that vsmatch rectified itself (a raw rig's)."""
+    if rectified_here:
+        return problem.replace(search_range.NOT_RECTIFIED, search_range.STILL_NOT_RECTIFIED)
+    return problem
 
 
 def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:

@@ -108,13 +108,17 @@ def write_video(path: str, pictures, fps: float, codec: str) -> int:
 
 
 def video_frame_count(path: str) -> int:
-    """The frames a video file holds, as its header says (0 when it cannot be read)."""
+    """The frames of a video file that decode (a file cut short by a full disk may still
+    claim every frame in its header)."""
+    count = 0
     with io.native_stderr_silenced():
         capture = cv2.VideoCapture(path)
         try:
-            return int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) if capture.isOpened() else 0
+            while capture.isOpened() and capture.read()[0]:
+                count += 1
         finally:
             capture.release()
+    return count
 
 
 @main.command()
@@ -198,10 +202,11 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
             with staged as frames_folder:
                 io.write_atomic(out, lambda tmp: _write_or_refuse(
                     tmp, pictures(frames_folder), fps, out, left))
+        stopped = max_frames is not None and count >= max_frames
+        unpaired = None if stopped else pairs.unpaired()
     finally:
         for source in sources:
             source.release()
-    unpaired = None if max_frames is not None and count >= max_frames else pairs.unpaired()
     seconds = time.perf_counter() - start
     verbose(ctx, f"{count} frames in {seconds:.1f} s ({count / seconds:.2f} fps), "
                  f"disparities {stereo.range[0]}..{stereo.range[1]}"
