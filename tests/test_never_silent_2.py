@@ -22,6 +22,7 @@ from vsmatch.cli import common
 from vsmatch.geometry import CalibrationError
 
 from conftest import random_pair
+from test_video import frame_count
 
 WIDTH, HEIGHT = 160, 96
 K = np.array([[300.0, 0, 80], [0, 300, 48], [0, 0, 1]])
@@ -254,14 +255,6 @@ def test_6_a_video_leaves_another_runs_temporary_alone(tmp_path, rng):
     assert result.exit_code == 0, result.output
     assert other.read_bytes() == b"another run's frames"
     assert frame_count(tmp_path / "d.avi") == 4
-
-
-def frame_count(path):
-    capture = cv2.VideoCapture(str(path))
-    count = 0
-    while capture.read()[0]:
-        count += 1
-    return count
 
 
 SIGTERM_AT_FIRST_RENAME = """
