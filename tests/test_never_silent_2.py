@@ -261,10 +261,11 @@ SIGTERM_AT_FIRST_RENAME = """
 import os, signal, sys
 real = os.replace
 def replace(src, dst):
+    result = real(src, dst)
     if str(dst).endswith(".pfm") and not getattr(replace, "sent", False):
-        replace.sent = True
+        replace.sent = True  # after the first output is in place, before the others
         os.kill(os.getpid(), signal.SIGTERM)
-    return real(src, dst)
+    return result
 os.replace = replace
 from vsmatch.cli import main
 main(sys.argv[1:])
@@ -661,3 +662,17 @@ def test_18_a_swapped_raw_pair_is_not_told_to_rectify(data_dir, tmp_path):
     line = one_line_error(invoke("run", rig_dir / "right.png", rig_dir / "left.png",
                                  "--calib", rig_dir / "rig.yml", "-o", tmp_path / "d.pfm"))
     assert "are the views swapped" in line and "rectify it first" not in line
+
+
+def test_22_run_writes_the_preview_with_its_colour_bar(tmp_path, rng):
+    views = write_pair(tmp_path, rng)
+    result = invoke("run", *views, "-o", tmp_path / "d.pfm", "--max-disp", 40, "--preview",
+                    tmp_path / "p.png")
+    assert result.exit_code == 0, result.output
+    picture = cv2.imread(str(tmp_path / "p.png"))
+    assert picture.shape[0] == HEIGHT and picture.shape[1] > WIDTH + 40
+    # Disparities of about 6 in a 0..40 search: the colours still span the scale.
+    turbo = cv2.applyColorMap(np.arange(256, dtype=np.uint8)[None], cv2.COLORMAP_TURBO)[0]
+    used = picture[8:-8, 24:WIDTH - 8].reshape(-1, 3).astype(int)
+    nearest = np.abs(used[:, None, :] - turbo[None].astype(int)).sum(2).argmin(1)
+    assert nearest.max() - nearest.min() > 128
