@@ -246,6 +246,19 @@ def format_tables(report: dict[str, Any]) -> str:
             cells = [result["scenes"][s][mask] for s in scenes] + [result["avg"][mask]]
             lines.append(name.ljust(width) + "".join(f"{v:{cell}.2f}" for v in cells))
         lines.append("")
+    # Sub-pixel precision beside the headline, on the headline's mask.
+    mask = masks[0]
+    for measure, label, digits in (("bad0.5", f"{mask} bad0.5 (%)", 2),
+                                   ("integer_share", f"{mask} integer share", 3)):
+        if all(measure in r["avg"]["metrics"].get(mask, {}) for r in methods.values()):
+            lines.append(label.ljust(width) + "".join(f"{s:>{cell}}" for s in scenes)
+                         + f"{'avg':>{cell}}")
+            for name, result in methods.items():
+                cells = [result["scenes"][s]["metrics"][mask][measure] for s in scenes]
+                cells.append(result["avg"]["metrics"][mask][measure])
+                lines.append(name.ljust(width) + "".join(f"{v:{cell}.{digits}f}"
+                                                         for v in cells))
+            lines.append("")
     rated = {n: r for n, r in methods.items() if "confidence" in r["avg"]}
     if rated:
         lines.append("confidence r (0 best)".ljust(width) + "".join(

@@ -33,6 +33,22 @@ def _errors(disp: np.ndarray, gt: np.ndarray, mask: np.ndarray) -> tuple[np.ndar
         int(mask.sum())
 
 
+#: How close to a whole number a disparity's fraction must be to count as "integer".
+INTEGER_TOLERANCE = 0.1
+
+
+def integer_share(disp: np.ndarray, mask: np.ndarray) -> float:
+    """Of the valid estimates in ``mask``, the share within :data:`INTEGER_TOLERANCE` of a
+    whole number: 0.2 for an even spread of fractions (as ground truth has), more for a
+    matcher that locks to pixels, whose clouds come out in layers."""
+    values = np.asarray(disp, dtype=np.float64)[mask]
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return float("nan")
+    distance = np.abs(values - np.round(values))
+    return float(np.mean(distance <= INTEGER_TOLERANCE))
+
+
 def bad_pixel_map(disp: np.ndarray, gt: np.ndarray, threshold: float) -> np.ndarray:
     """True where the estimate is off by more than ``threshold``; invalid estimates are bad."""
     with np.errstate(invalid="ignore"):
@@ -57,6 +73,7 @@ def middlebury_measures(disp: np.ndarray, gt: np.ndarray, mask: np.ndarray,
         return {}
     out = {bad_name(t): bad_percent(disp, gt, mask, t) for t in thresholds}
     out["invalid"] = 100.0 * (count - errors.size) / count
+    out["integer_share"] = integer_share(disp, mask)
     if errors.size:
         out["avgerr"] = float(errors.mean())
         out["rms"] = float(np.sqrt(np.mean(errors ** 2)))
@@ -82,6 +99,8 @@ def kitti_measures(disp: np.ndarray, gt: np.ndarray, mask: np.ndarray) -> dict[s
     for t in (2, 3, 4, 5):
         out[f"out{t}"] = bad_percent(disp, gt, mask, float(t))
     out["invalid"] = 100.0 * (count - errors.size) / count
+    out["bad0.5"] = bad_percent(disp, gt, mask, 0.5)
+    out["integer_share"] = integer_share(disp, mask)
     if errors.size:
         out["avgerr"] = float(errors.mean())
     return out

@@ -13,7 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import kitti, middlebury2, middlebury2014, middlebury_third
+from . import eth3d, kitti, middlebury2, middlebury2014, middlebury_third
 from .base import DatasetError, Scene
 
 __all__ = ["DATASETS", "Dataset", "DatasetError", "Scene", "dataset_folder", "load_dataset",
@@ -47,6 +47,10 @@ DATASETS = {
     **{f"middlebury2014-{size}": Dataset(f"middlebury2014-{size}", middlebury2014.load,
                                          "bad", 2.0, _MIDDLEBURY2014_NOTE.format(code))
        for size, code in (("quarter", "Q"), ("half", "H"), ("full", "F"))},
+    "eth3d": Dataset("eth3d-dev", eth3d.load, "bad", 1.0,
+                     "needs ETH3D's low-res two-view training scenes and their ground truth "
+                     "from the ETH3D benchmark's website, one folder per scene, in "
+                     "DIR/eth3d-dev/"),
     "kitti2015": Dataset("kitti2015", kitti.load_kitti2015, "D1", None,
                          _KITTI_NOTE.format("kitti2015")),
     "kitti2012": Dataset("kitti2012", kitti.load_kitti2012, "out3", None,
