@@ -42,6 +42,10 @@ class CostConfig:
     lambda_ad: float | None = _param(None, 0.01, 1000.0, nullable=True)
     # Weight of the colour term (set by the photometric stage when its residual is large).
     ad_weight: float = _param(1.0, 0.0, 1.0)
+    # The colour term compares colours less their mean over a box this many pixels wide
+    # (odd); 0 compares them as they are. Real cameras differ in vignetting and colour
+    # response, which a plain difference takes for evidence on textureless surfaces.
+    ad_mean_box: int = _param(0, 0, 255)
     # Gaussian sigma applied to both views before every stage; 0 = off.
     presmooth_sigma: float = _param(0.0, 0.0, 5.0)
 
@@ -189,6 +193,9 @@ class PhotometricConfig:
     box: int = _param(9, 1, 63)
     fade_from: float = _param(5.0, 0.0, 255.0)
     fade_to: float = _param(10.0, 0.0, 255.0)
+    # What the map leaves, spread smoothly (a Gaussian of this many widths) and added to
+    # the right view: vignetting and colour responses that differ across the image. 0: off.
+    field_sigma: float = _param(0.0, 0.0, 1.0)
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,13 @@ MIN_MATCHES = 1000
 NOISE_RESIDUAL = 3.0
 
 
+#: Differences of matched pixels are clipped to this many grey levels before they are
+#: spread (a wrong match's would pull the field), and the field's first FIELD_DEAD_BAND
+#: grey levels are dropped.
+FIELD_CLIP = 24.0
+FIELD_DEAD_BAND = 0.5
+
+
 @dataclass(frozen=True)
 class Correction:
     """The right view's per-channel map onto the left's colours, and what it leaves."""
@@ -38,6 +45,10 @@ class Correction:
     before: float  # the same without the map
     matches: int  # pixels it was learnt from
     noise: float  # the part of the residual the views' noise explains
+    # (h, w, channels) float32 at the views' size learnt on, or None: what is still to be
+    # added to the mapped right view there, smooth over the image (vignetting, a colour
+    # response that differs across the field of view).
+    field: np.ndarray | None = None
 
     @property
     def excess(self) -> float:
@@ -50,9 +61,11 @@ def _channels(image: np.ndarray) -> np.ndarray:
 
 
 def learn(left: np.ndarray, right: np.ndarray, disp: np.ndarray,
-          matched: np.ndarray) -> Correction | None:
+          matched: np.ndarray, field_sigma: float = 0.0) -> Correction | None:
     """The right view's map onto the left's from left pixels ``matched`` at ``disp``;
-    ``None`` with fewer than :data:`MIN_MATCHES` usable pixels."""
+    ``None`` with fewer than :data:`MIN_MATCHES` usable pixels. With ``field_sigma`` > 0,
+    also the smooth field of what the map leaves (:func:`difference_field`, a Gaussian of
+    ``field_sigma`` x the width), and the residual after it."""
     ys, xs = np.nonzero(matched)
     xr = xs - np.rint(disp[ys, xs]).astype(np.int64)
     inside = xr >= 0
@@ -75,11 +88,39 @@ def learn(left: np.ndarray, right: np.ndarray, disp: np.ndarray,
     mapped = np.empty_like(at_right)
     for c in range(at_right.shape[1]):
         mapped[:, c] = table[at_right[:, c], c]
-    residual = _median_channel_difference(at_left, mapped)
+    field = None
+    if field_sigma > 0:
+        field = difference_field(at_left, mapped, ys, xr, right.shape[:2],
+                                 field_sigma * width)
+        corrected = np.clip(np.rint(mapped + field[ys, xr]), 0, 255).astype(np.uint8)
+        residual = _median_channel_difference(at_left, corrected)
+    else:
+        residual = _median_channel_difference(at_left, mapped)
     before = _median_channel_difference(at_left, at_right)
     noise = NOISE_RESIDUAL * (estimate_noise(left) + estimate_noise(right)) / 2
     return Correction(table=table, residual=residual, before=before, matches=len(ys),
-                      noise=noise)
+                      noise=noise, field=field)
+
+
+def difference_field(at_left: np.ndarray, mapped: np.ndarray, ys: np.ndarray,
+                     xr: np.ndarray, shape: tuple[int, int], sigma: float) -> np.ndarray:
+    """The left minus the mapped right colours of the matched pixels, placed at their
+    right pixels and spread smoothly over the right view: a Gaussian-weighted mean of the
+    nearby differences (normalised convolution), float32 (h, w, channels)."""
+    height, width = shape
+    channels = at_left.shape[1]
+    sums = np.zeros((height, width, channels), np.float32)
+    counts = np.zeros((height, width), np.float32)
+    differences = np.clip(at_left.astype(np.float32) - mapped.astype(np.float32),
+                          -FIELD_CLIP, FIELD_CLIP)  # a wrong match's difference is bounded
+    np.add.at(sums, (ys, xr), differences)
+    np.add.at(counts, (ys, xr), 1.0)
+    blur = dict(ksize=(0, 0), sigmaX=sigma, borderType=cv2.BORDER_REPLICATE)
+    weight = cv2.GaussianBlur(counts, **blur)
+    spread = cv2.GaussianBlur(sums, **blur).reshape(height, width, channels)
+    field = spread / np.maximum(weight, 1e-3)[:, :, None]
+    # What noise and the map's rounding leave is no field: only its excess is added.
+    return (np.sign(field) * np.maximum(np.abs(field) - FIELD_DEAD_BAND, 0)).astype(np.float32)
 
 
 def _mid_ranks(values: np.ndarray) -> np.ndarray:
@@ -100,9 +141,15 @@ def _median_channel_difference(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def apply(right: np.ndarray, correction: Correction) -> np.ndarray:
-    """The right view with each channel passed through the correction's table."""
+    """The right view with each channel passed through the correction's table, and its
+    field (resized to the view) added."""
     table = correction.table.reshape(256, 1, -1)  # one column per channel, as cv2.LUT takes
-    return cv2.LUT(right, table).reshape(right.shape)
+    mapped = cv2.LUT(right, table).reshape(right.shape)
+    if correction.field is None:
+        return mapped
+    field = cv2.resize(correction.field, right.shape[1::-1], interpolation=cv2.INTER_LINEAR)
+    field = field.reshape(right.shape)
+    return np.clip(np.rint(mapped + field), 0, 255).astype(np.uint8)
 
 
 def colour_weight(residual: float, cfg: PhotometricConfig) -> float:

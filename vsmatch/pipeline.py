@@ -225,7 +225,8 @@ def _correct_exposure(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: C
         if width <= cfg.photometric.max_width:
             break
     first_disp, matched = _first_match(small_l, small_r, small_max, cfg)
-    correction = photometric.learn(small_l, small_r, first_disp, matched)
+    correction = photometric.learn(small_l, small_r, first_disp, matched,
+                                   cfg.photometric.field_sigma)
     if correction is None:
         return right, cfg, None
     weight = photometric.colour_weight(correction.excess, cfg.photometric)

@@ -138,7 +138,8 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
     support = cfg.pyramid.support
     arms_cfg = dataclasses.replace(cfg.arms, l2=min(cfg.arms.l2, support),
                                    l1=min(cfg.arms.l1, support))
-    margin = support + cfg.cost.census_height // 2 + 1  # + 1: the Sobel row
+    # + 1: the Sobel row; the colour term's mean box reaches half its width further.
+    margin = support + max(cfg.cost.census_height // 2 + 1, cfg.cost.ad_mean_box // 2)
     height, width = left.shape[:2]
     low, high = (upsample_nearest(v, (height, width))
                  for v in coarse_extremes(coarse, coarse_labels))
