@@ -158,6 +158,32 @@ class SubpixelConfig:
 
     enabled: bool = _param(False)
     median: bool = _param(False)
+    # "parabola", or "equiangular" (a symmetric V: census-like costs, less pixel-locking).
+    fit: str = _param("parabola", choices=("parabola", "equiangular", "blend"))
+
+
+@dataclass(frozen=True)
+class PlanesConfig:
+    """Slanted planes (``vsmatch.planes``): each pixel's support region (a cross with arms
+    of at most ``l2`` pixels) gets the least-squares plane through its left-right
+    consistent disparities, ``iterations`` times with the pixels within ``inlier`` px of
+    the last plane; a rejected pixel takes its plane's value, a kept one too when within
+    ``snap`` px of it. Regions with less than ``min_share`` of kept pixels fit none."""
+
+    enabled: bool = _param(False)
+    l2: int = _param(40, 1, 255)
+    iterations: int = _param(2, 1, 10)
+    inlier: float = _param(1.0, 0.0, 100.0)
+    snap: float = _param(1.0, 0.0, 100.0)
+    min_share: float = _param(0.2, 0.0, 1.0)
+    # A region whose kept disparities lie farther than this (standard deviation, px) from
+    # their plane is no plane (it spans a depth edge): nothing changes there.
+    max_spread: float = _param(100.0, 0.0, 100.0)
+    # Arms end before a step of more than this many px between neighbours' disparities
+    # (0: colour alone decides, as in aggregation).
+    jump: float = _param(0.0, 0.0, 100.0)
+    # Whether rejected pixels take their plane (else they keep the fill's value).
+    fill: bool = _param(True)
 
 
 @dataclass(frozen=True)
@@ -224,6 +250,7 @@ class Config:
     fill: FillConfig = field(default_factory=FillConfig)
     discontinuity: DiscontinuityConfig = field(default_factory=DiscontinuityConfig)
     subpixel: SubpixelConfig = field(default_factory=SubpixelConfig)
+    planes: PlanesConfig = field(default_factory=PlanesConfig)
     photometric: PhotometricConfig = field(default_factory=PhotometricConfig)
     pyramid: PyramidConfig = field(default_factory=PyramidConfig)
     memory: MemoryConfig = field(default_factory=MemoryConfig)
@@ -262,6 +289,11 @@ def _check_value(key: str, spec: dataclasses.Field, value: Any) -> Any:
         if not isinstance(value, bool):
             raise ConfigError(f"config value {key} = {quote(value)} must be true or false")
         return value
+    if kind is str:
+        if value not in meta["choices"]:
+            raise ConfigError(f"config value {key} = {quote(value)} is not one of "
+                              f"{', '.join(meta['choices'])}")
+        return value
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ConfigError(f"config value {key} = {quote(value)} must be a number")
     if not math.isfinite(value):
@@ -284,7 +316,7 @@ def _check_value(key: str, spec: dataclasses.Field, value: Any) -> Any:
 
 def _field_kind(spec: dataclasses.Field) -> type:
     text = str(spec.type)
-    for kind in (bool, int, float):
+    for kind in (bool, int, float, str):
         if text.startswith(kind.__name__):
             return kind
     raise TypeError(f"unsupported config field type {text}")

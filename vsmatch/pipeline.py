@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from . import (aggregation, confidence, cost, disparity, noise, optimization, photometric,
+from . import (aggregation, confidence, cost, disparity, noise, optimization, photometric, planes,
                pyramid, refinement, sensitivity, volumes)
 from .config import Config, CostConfig, load_config
 from .disparity import INVALID_DISPARITY
@@ -203,6 +203,10 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
                                    cfg.pyramid.min_levels, left.shape[0], cfg.pyramid.max_cells)
     result = _coarse_to_fine(left, right, max_disp, cfg, levels)
     result.seconds = {**seconds, **result.seconds}
+    if cfg.planes.enabled and result.labels is not None:
+        with _stage(result.seconds, "planes"):
+            result.disparity = planes.fit_planes(result.disparity, result.labels, left,
+                                                 cfg.arms, cfg.planes)
     result.photometric = correction
     with _stage(result.seconds, "confidence"):
         features = confidence.pixel_features(result.disparity, result.labels, left,
@@ -451,7 +455,7 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
         with stage("subpixel"):
             # The aggregated costs, not the scanline ones: the penalties flatten the cost
             # curve around the minimum (measured: fewer bad pixels at 0.5 and 1.0).
-            result = refinement.subpixel(result, aggregated)
+            result = refinement.subpixel(result, aggregated, cfg.subpixel.fit)
     if cfg.subpixel.median:
         with stage("median"):
             result = refinement.median3(result)

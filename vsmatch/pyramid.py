@@ -19,7 +19,7 @@ import math
 import cv2
 import numpy as np
 
-from . import aggregation, cost, noise, optimization, sensitivity
+from . import aggregation, cost, noise, optimization, refinement, sensitivity
 from ._kernels.arms import DOWN, RIGHT
 from ._kernels.band import RUN, band_aggregate, band_costs, band_winners, search_band
 from .config import ArmsConfig, Config
@@ -156,7 +156,7 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
         bottom = min(height, top + REFINE_ROWS)
         terms, arms, lo_block, hi_block, y0 = blocks.block(top, bottom)
         block = search_in_bands(terms, arms, lo_block, hi_block, n_disp, support,
-                                bool(cfg.subpixel.enabled))
+                                subpixel_fit(cfg))
         out[top:bottom] = block[top - y0:bottom - y0]
     return out
 
@@ -238,10 +238,15 @@ def _refine_with_scanline(blocks: _BandBlocks, left: np.ndarray, right: np.ndarr
                                           left[first_row:stop], right[first_row:stop],
                                           cfg.scanline)
         part = np.empty(lo.shape, dtype=np.float32)
-        band_winners(agg, sums, agg_at, first, last, lo, hi, bool(cfg.subpixel.enabled),
+        band_winners(agg, sums, agg_at, first, last, lo, hi, subpixel_fit(cfg),
                      part)
         out[core_first:core_stop] = part[core_first - first_row:core_stop - first_row]
         del agg, sums
+
+
+def subpixel_fit(cfg: Config) -> int:
+    """The band kernels' sub-pixel fit: 0 (none) or the config's (``refinement``'s code)."""
+    return refinement.fit_code(cfg.subpixel.fit) if cfg.subpixel.enabled else 0
 
 
 def arms_from_below(view: np.ndarray, cfg: ArmsConfig) -> np.ndarray:
@@ -266,15 +271,16 @@ def arms_from_below(view: np.ndarray, cfg: ArmsConfig) -> np.ndarray:
 
 
 def search_in_bands(terms: tuple, arms: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                    n_disp: int, support: int, subpixel: bool) -> np.ndarray:
+                    n_disp: int, support: int, subpixel: int) -> np.ndarray:
     """Each pixel's best disparity in ``lo .. hi`` (float32, inf where ``lo > hi``), its
-    candidates' costs summed over its cross (arms of at most ``support`` pixels).
+    candidates' costs summed over its cross (arms of at most ``support`` pixels);
+    ``subpixel``: the fit's code (:func:`subpixel_fit`), 0 for whole disparities.
 
     ``terms`` are :func:`vsmatch.cost.cost_terms`' for the views.
     """
     store, starts = band_store(terms, lo, hi, n_disp, support)
     out = np.empty(lo.shape, dtype=np.float32)
-    search_band(store, starts, arms, lo, hi, n_disp, subpixel, out)
+    search_band(store, starts, arms, lo, hi, n_disp, int(subpixel), out)
     return out
 
 

@@ -37,11 +37,22 @@ def discontinuity_adjust(disp: np.ndarray, volume: np.ndarray,
     return out
 
 
-def subpixel(disp: np.ndarray, volume: np.ndarray) -> np.ndarray:
-    """Sub-pixel disparity by a parabola through the costs around each integer disparity."""
+def subpixel(disp: np.ndarray, volume: np.ndarray, fit: str = "parabola") -> np.ndarray:
+    """Sub-pixel disparity by a fit through the costs around each integer disparity:
+    ``parabola`` or ``equiangular`` (:data:`SUBPIXEL_FITS`)."""
     out = np.empty(disp.shape, dtype=np.float32)
-    _k.subpixel_parabola(np.ascontiguousarray(disp, dtype=np.float32), volume, out)
+    _k.subpixel_fit(np.ascontiguousarray(disp, dtype=np.float32), volume, fit_code(fit),
+                    out)
     return out
+
+
+#: The sub-pixel fits by name, as the kernels know them.
+SUBPIXEL_FITS = {"parabola": _k.FIT_PARABOLA, "equiangular": _k.FIT_EQUIANGULAR,
+                 "blend": _k.FIT_BLEND}
+
+
+def fit_code(fit: str) -> int:
+    return SUBPIXEL_FITS[fit]
 
 
 def median3(disp: np.ndarray) -> np.ndarray:

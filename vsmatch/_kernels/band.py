@@ -4,6 +4,7 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS
 from .arms import DOWN, LEFT, RIGHT, UP
 from .census import popcount64
+from .refine import subpixel_offset
 from .scanline import path_step
 
 
@@ -75,14 +76,10 @@ def _add_costs(local, store, starts, y, x, first, n):
 
 
 @njit(inline="always")
-def _parabola(best, c0, c1, c2):
-    """``best`` moved to the minimum of the parabola through the costs at best - 1, best,
-    best + 1, by at most half a disparity (float32); ``best`` where the curve is flat."""
-    denom = c0 + c2 - 2.0 * c1
-    if denom > 1e-9:
-        offset = (c0 - c2) / (2.0 * denom)
-        return np.float32(best + min(0.5, max(-0.5, offset)))
-    return np.float32(best)
+def _parabola(best, c0, c1, c2, fit):
+    """``best`` moved to the minimum of the sub-pixel fit ``fit`` (``refine.subpixel_offset``)
+    through the costs at best - 1, best, best + 1 (float32)."""
+    return np.float32(best + subpixel_offset(c0, c1, c2, fit))
 
 
 @njit(**KERNEL_OPTIONS)
@@ -127,7 +124,7 @@ def search_band(store, starts, arms, lo, hi, n_disp, subpixel, out):
             result = np.float32(best)
             if subpixel and best - 1 >= first and best + 1 <= last:
                 result = _parabola(best, local[best - 1 - first], best_cost,
-                                   local[best + 1 - first])
+                                   local[best + 1 - first], subpixel)
             out[y, x] = result
 
 
@@ -264,5 +261,5 @@ def band_winners(agg, sums, agg_at, first, last, lo, hi, subpixel, out):
             result = np.float32(best)
             if subpixel and best - 1 >= first[y, x] and best + 1 <= last[y, x]:
                 result = _parabola(best, agg[base + best - 1], agg[base + best],
-                                   agg[base + best + 1])
+                                   agg[base + best + 1], subpixel)
             out[y, x] = result

@@ -85,9 +85,36 @@ def discontinuity_adjust(disp, volume, jump, out):
                         out[y, x] = nd
 
 
+#: Sub-pixel fits: none, a parabola, or the equiangular (symmetric V) fit, which suits
+#: costs that grow linearly away from their minimum (census) and locks less to pixels.
+FIT_NONE, FIT_PARABOLA, FIT_EQUIANGULAR, FIT_BLEND = 0, 1, 2, 3
+
+
+@njit(inline="always")
+def subpixel_offset(c0, c1, c2, fit):
+    """The minimum's offset from d given the costs at d - 1, d, d + 1, within +-0.5; 0
+    where the curve is flat there. ``FIT_BLEND``: the mean of the two fits."""
+    parabola = 0.0
+    denom = c0 + c2 - 2.0 * c1
+    if denom > 1e-9:
+        parabola = min(0.5, max(-0.5, (c0 - c2) / (2.0 * denom)))
+    equiangular = 0.0
+    rise = max(c0, c2) - c1
+    if rise > 1e-9:
+        equiangular = min(0.5, max(-0.5, (c0 - c2) / (2.0 * rise)))
+    if fit == FIT_PARABOLA:
+        return parabola
+    if fit == FIT_EQUIANGULAR:
+        return equiangular
+    if fit == FIT_BLEND:
+        return 0.5 * (parabola + equiangular)
+    return 0.0
+
+
 @njit(**KERNEL_OPTIONS)
-def subpixel_parabola(disp, volume, out):
-    """Vertex of the parabola through the costs at d - 1, d, d + 1 (offset within +-0.5)."""
+def subpixel_fit(disp, volume, fit, out):
+    """``disp`` moved to the minimum of the fit (:func:`subpixel_offset`) through the costs
+    at d - 1, d, d + 1 of each pixel's integer disparity d."""
     height, width, n_disp = volume.shape
     for y in prange(height):
         for x in range(width):
@@ -98,8 +125,5 @@ def subpixel_parabola(disp, volume, out):
             k = int(d)
             if k <= 0 or k >= n_disp - 1:
                 continue
-            c0, c1, c2 = volume[y, x, k - 1], volume[y, x, k], volume[y, x, k + 1]
-            denom = c0 + c2 - 2.0 * c1
-            if denom > 1e-9:
-                offset = (c0 - c2) / (2.0 * denom)
-                out[y, x] = k + min(0.5, max(-0.5, offset))
+            out[y, x] = k + subpixel_offset(volume[y, x, k - 1], volume[y, x, k],
+                                            volume[y, x, k + 1], fit)

@@ -1,0 +1,61 @@
+"""Slanted planes: each pixel's support region fits a plane to its consistent disparities.
+
+Cross-based aggregation assumes the surface inside each cross is fronto-parallel, so a road
+or a desk seen at a grazing angle comes out in steps, and pixels the left-right check
+rejected are filled along their row with a constant. Here each pixel's cross region (arms
+grown on the left view, longer than the aggregation's) gets the least-squares plane
+``d = a x + b y + c`` through the pixels the check kept: the moments of those pixels are
+summed over the region with the aggregation's own kernels (a 9-channel "volume"), and the
+plane solved per pixel. Outliers leave the fit over a second pass. A rejected pixel takes
+its plane's value; a kept one takes it when within ``snap`` pixels (sub-pixel values from
+the plane rather than from a parabola through integer costs).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from . import aggregation, sensitivity
+from ._kernels.planes import N_MOMENTS, cut_arms_at_jumps, plane_moments, plane_values
+from .config import ArmsConfig, PlanesConfig
+from .disparity import VALID
+from .images import to_grey
+
+#: Least variance of a region's pixel coordinates along an axis for a slope along it
+#: (a region one or two pixels wide fits a constant along that axis).
+MIN_SPREAD = 1.0
+
+
+def fit_planes(disp: np.ndarray, labels: np.ndarray, left: np.ndarray,
+               arms_cfg: ArmsConfig, cfg: PlanesConfig) -> np.ndarray:
+    """``disp`` with each rejected pixel (``labels`` not VALID) set to its region's plane,
+    and each kept one within ``cfg.snap`` of it too (float32; NaN planes change nothing)."""
+    grad, _ = sensitivity.visual_sensitivity(to_grey(left), direction=False)
+    arms = aggregation.cross_arms(left, None, grad,
+                                  dataclasses.replace(arms_cfg, l2=cfg.l2, kappa=0.0))
+    if cfg.jump > 0:
+        cut_arms_at_jumps(arms, np.ascontiguousarray(disp, dtype=np.float32),
+                          np.float32(cfg.jump))
+    no_limit = np.full_like(arms, 255)
+    kept = (labels == VALID) & np.isfinite(disp)
+    weight = kept.astype(np.float32)
+    disp = np.ascontiguousarray(disp, dtype=np.float32)
+    moments = np.empty(disp.shape + (N_MOMENTS,), np.float32)
+    plane = np.empty(disp.shape, np.float32)
+    spread = np.empty(disp.shape, np.float32)
+    for _ in range(cfg.iterations):
+        plane_moments(disp, weight, moments)
+        means = aggregation.aggregate_cross(moments, arms, no_limit, iterations=1)
+        plane_values(means, np.float32(cfg.min_share), np.float32(MIN_SPREAD), plane, spread)
+        with np.errstate(invalid="ignore"):
+            weight = (kept & (np.abs(disp - plane) <= cfg.inlier)).astype(np.float32)
+    out = disp.copy()
+    with np.errstate(invalid="ignore"):
+        fitted = np.isfinite(plane) & (spread <= cfg.max_spread)
+    with np.errstate(invalid="ignore"):
+        near = np.abs(disp - plane) <= cfg.snap
+        take = fitted & ((~kept & cfg.fill) | near)
+    out[take] = plane[take]
+    return out
