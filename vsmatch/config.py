@@ -69,6 +69,11 @@ class NoiseConfig:
     #: The longest arm (arms.l2) on noisy views, reached as the other changes fade in;
     #: 0 keeps arms.l2. Noise needs longer arms to average out than clean views do.
     arms_l2: int = _param(0, 0, 255)
+    #: The sub-pixel fit on noisy views ("same": the config's): the parabola averages the
+    #: noise of three costs, the equiangular fit follows the smallest.
+    subpixel_fit: str = _param("same", choices=("same", "parabola", "equiangular", "blend"))
+    #: Whether the slanted planes stay on for noisy views.
+    planes: bool = _param(True)
 
 
 @dataclass(frozen=True)

@@ -80,7 +80,9 @@ def adapt_to_noise(cfg: Config, sigma: float) -> Config:
     amount whatever the threshold; the census and gradient lambdas are multiplied by
     ``1 + gain * noise.lambda_per_sigma * residual``, and the census dead band grows by
     ``gain * noise.band_per_sigma * residual``. With ``noise.arms_l2`` set, the longest
-    arm moves from ``arms.l2`` towards it by ``gain``.
+    arm moves from ``arms.l2`` towards it by ``gain``; once ``gain`` reaches one half, the
+    sub-pixel fit becomes ``noise.subpixel_fit`` (unless "same") and the planes stay on only
+    with ``noise.planes``.
     """
     n = cfg.noise
     if not n.adapt or sigma <= n.floor:
@@ -102,4 +104,12 @@ def adapt_to_noise(cfg: Config, sigma: float) -> Config:
     arms = dataclasses.replace(a, tau1=a.tau1 + widen, tau2=a.tau2 + widen,
                                tau3=a.tau3 + widen, l2=l2)
     scanline = dataclasses.replace(cfg.scanline, tau=cfg.scanline.tau + widen)
-    return dataclasses.replace(cfg, cost=cost, arms=arms, scanline=scanline)
+    cfg = dataclasses.replace(cfg, cost=cost, arms=arms, scanline=scanline)
+    if gain >= 0.5:  # the switches of noisy views, once the changes are half faded in
+        if n.subpixel_fit != "same":
+            cfg = dataclasses.replace(cfg, subpixel=dataclasses.replace(
+                cfg.subpixel, fit=n.subpixel_fit))
+        if not n.planes:
+            cfg = dataclasses.replace(cfg, planes=dataclasses.replace(cfg.planes,
+                                                                      enabled=False))
+    return cfg

@@ -203,10 +203,11 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
                                    cfg.pyramid.min_levels, left.shape[0], cfg.pyramid.max_cells)
     result = _coarse_to_fine(left, right, max_disp, cfg, levels)
     result.seconds = {**seconds, **result.seconds}
-    if cfg.planes.enabled and result.labels is not None:
+    adapted = result.config  # with the noise adaptation's changes
+    if adapted.planes.enabled and result.labels is not None:
         with _stage(result.seconds, "planes"):
             result.disparity = planes.fit_planes(result.disparity, result.labels, left,
-                                                 cfg.arms, cfg.planes)
+                                                 adapted.arms, adapted.planes)
     result.photometric = correction
     with _stage(result.seconds, "confidence"):
         features = confidence.pixel_features(result.disparity, result.labels, left,
