@@ -32,6 +32,9 @@ def test_time_pairs_reports_each_config_and_sgbm_mode_per_scene():
         "seconds"]
     # The synthetic pair is easy for vsmatch, and SGBM's empty left margin counts as bad.
     assert total["paper"]["error"] < 5 < total["sgbm-hh"]["error"]
+    # Sub-pixel precision beside the headline (issue 27): bad 0.5 and the integer share.
+    assert total["paper"]["error"] <= total["paper"]["bad0.5"] <= 100
+    assert 0 <= total["fast"]["integer_share"] <= 1
 
 
 def test_the_tradeoff_plot_names_every_method(tmp_path):

@@ -102,11 +102,13 @@ def time_pairs(pairs, configs=BENCH_CONFIGS, rounds: int = 5,
                 disparities[name] = result.disparity if name in cfgs else \
                     sgbm_fill_from_left(raw, scene.min_disp)
         mask = evaluation.headline_mask(scene)
-        per_scene[scene.name] = {
-            name: {"seconds": best[name], "stages": stages.get(name, {}),
-                   "error": scoring.measures(disparities[name], scene.ground_truth,
-                                             mask)[scoring.metric]}
-            for name in methods}
+        per_scene[scene.name] = {}
+        for name in methods:
+            measures = scoring.measures(disparities[name], scene.ground_truth, mask)
+            per_scene[scene.name][name] = {
+                "seconds": best[name], "stages": stages.get(name, {}),
+                "error": measures[scoring.metric], "bad0.5": measures["bad0.5"],
+                "integer_share": measures["integer_share"]}
     totals = {}
     for name in methods:
         seconds = sum(s[name]["seconds"] for s in per_scene.values())
@@ -114,9 +116,9 @@ def time_pairs(pairs, configs=BENCH_CONFIGS, rounds: int = 5,
         for s in per_scene.values():
             for k, v in s[name]["stages"].items():
                 stage_totals[k] = stage_totals.get(k, 0.0) + v
-        totals[name] = {"seconds": seconds,
-                        "error": float(np.mean([s[name]["error"] for s in per_scene.values()])),
-                        "stages": stage_totals}
+        totals[name] = {"seconds": seconds, "stages": stage_totals,
+                        **{key: float(np.mean([s[name][key] for s in per_scene.values()]))
+                           for key in ("error", "bad0.5", "integer_share")}}
     for name in methods:
         for peer in ("sgbm-hh", "sgbm-5"):
             if peer in totals:
@@ -383,8 +385,14 @@ def format_report(report: dict[str, Any]) -> str:
     lines.append(f"{'x SGBM 5-dir':<12}" + "".join(f"{total[m].get('x_sgbm-5', 0):11.2f}"
                                                  for m in methods))
     lines.append(f"{'error':<12}" + "".join(f"{total[m]['error']:11.2f}" for m in methods))
+    if all("bad0.5" in total[m] for m in methods):
+        lines.append(f"{'bad 0.5':<12}" + "".join(f"{total[m]['bad0.5']:11.2f}"
+                                                   for m in methods))
+        lines.append(f"{'integer':<12}" + "".join(f"{total[m]['integer_share']:11.3f}"
+                                                   for m in methods))
     lines.append("error: mean over the pairs of nonocc bad 1.0 (middlebury2) and bad 2.0 "
-                 "(Middlebury 2014)")
+                 "(Middlebury 2014); bad 0.5 and integer (the share of estimates within 0.1 "
+                 "px of a whole number: 0.2 for an even spread) on the same pixels")
     for name in pairs["configs"]:
         lines += ["", f"{name}: stage seconds, sum over the pairs:"]
         for stage, sec in sorted(total[name]["stages"].items(), key=lambda kv: -kv[1]):

@@ -166,6 +166,21 @@ def combine(features: np.ndarray, disparity: np.ndarray,
     return confidence
 
 
+#: The confidence a winner at either end of the searched range keeps at most: its cost
+#: curve may still fall beyond the range (the true disparity lies outside it), so it is
+#: never trusted for depth and clouds (below :data:`DEFAULT_MIN_CONFIDENCE`).
+RANGE_END_CONFIDENCE = 0.5
+
+
+def cap_range_ends(confidence: np.ndarray, disparity: np.ndarray, n_disp: int) -> None:
+    """Cap, in place, the confidence of pixels whose disparity lies within half a pixel
+    of 0 or of ``n_disp - 1``, the ends of the range searched (0-based)."""
+    with np.errstate(invalid="ignore"):
+        ends = (disparity < 0.5) | (disparity > n_disp - 1.5)
+    np.minimum(confidence, np.where(ends, RANGE_END_CONFIDENCE, 1.0).astype(np.float32),
+               out=confidence)
+
+
 def matchability(margin: np.ndarray, raw_margin: np.ndarray) -> np.ndarray:
     """0 .. 1 from the mean cost-curve margins around each pixel (:data:`GATE_WINDOW`
     square), of the costs the winner was chosen on and of the aggregated costs before

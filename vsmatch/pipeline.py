@@ -160,7 +160,8 @@ def _run_below_zero(left: np.ndarray, right: np.ndarray, max_disp: int, min_disp
     moved[:, width - shift:] = right[:, -1:]
     result = _run_from_zero(left, moved, max_disp - min_disp, cfg)
     placed = _placed(result, left.shape[:2], slice(None), min_disp, max_disp)
-    columns = np.arange(width, dtype=np.float32)[None, :]
+    # In float64: a float32 difference rounds 419.500003 down to the limit itself.
+    columns = np.arange(width, dtype=np.float64)[None, :]
     with np.errstate(invalid="ignore"):
         beyond = columns - placed.disparity > width - 0.5
     placed.disparity[beyond] = INVALID_DISPARITY
@@ -213,6 +214,7 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
         features = confidence.pixel_features(result.disparity, result.labels, left,
                                              result.curve)
         result.confidence = confidence.combine(features, result.disparity)
+        confidence.cap_range_ends(result.confidence, result.disparity, max_disp + 1)
     return result
 
 

@@ -18,6 +18,7 @@ import dataclasses
 import numpy as np
 
 from . import aggregation, sensitivity
+from ._kernels.arms import DOWN, UP
 from ._kernels.planes import N_MOMENTS, cut_arms_at_jumps, plane_moments, plane_values
 from .config import ArmsConfig, PlanesConfig
 from .disparity import VALID
@@ -28,20 +29,54 @@ from .images import to_grey
 MIN_SPREAD = 1.0
 
 
+#: Rows fitted at a time (with a margin of ``planes.l2`` rows on either side, which holds
+#: every region of the block's rows): it bounds the moments' memory (80 bytes a pixel).
+#: A constant, so the result depends on the image and the config only.
+PLANE_ROWS = 512
+
+
 def fit_planes(disp: np.ndarray, labels: np.ndarray, left: np.ndarray,
                arms_cfg: ArmsConfig, cfg: PlanesConfig) -> np.ndarray:
     """``disp`` with each rejected pixel (``labels`` not VALID) set to its region's plane,
-    and each kept one within ``cfg.snap`` of it too (float32; NaN planes change nothing)."""
+    and each kept one within ``cfg.snap`` of it too (float32; where no plane fits, or the
+    region's disparities spread more than ``cfg.max_spread`` about it, nothing changes)."""
     grad, _ = sensitivity.visual_sensitivity(to_grey(left), direction=False)
     arms = aggregation.cross_arms(left, None, grad,
                                   dataclasses.replace(arms_cfg, l2=cfg.l2, kappa=0.0))
-    if cfg.jump > 0:
-        cut_arms_at_jumps(arms, np.ascontiguousarray(disp, dtype=np.float32),
-                          np.float32(cfg.jump))
-    no_limit = np.full_like(arms, 255)
-    kept = (labels == VALID) & np.isfinite(disp)
-    weight = kept.astype(np.float32)
     disp = np.ascontiguousarray(disp, dtype=np.float32)
+    kept = (labels == VALID) & np.isfinite(disp)
+    if cfg.jump > 0:
+        cut_arms_at_jumps(arms, np.where(kept, disp, np.float32(np.nan)),
+                          np.float32(cfg.jump))
+    out = disp.copy()
+    height = disp.shape[0]
+    for top in range(0, height, PLANE_ROWS):
+        bottom = min(height, top + PLANE_ROWS)
+        y0, y1 = max(0, top - cfg.l2), min(height, bottom + cfg.l2)
+        plane, spread = _block_planes(disp[y0:y1], kept[y0:y1],
+                                      np.ascontiguousarray(arms[:, y0:y1]), cfg)
+        core = slice(top - y0, bottom - y0)
+        block, plane, spread, block_kept = (a[core] for a in (disp[y0:y1], plane, spread,
+                                                             kept[y0:y1]))
+        with np.errstate(invalid="ignore"):
+            fitted = np.isfinite(plane) & (spread <= cfg.max_spread)
+            near = np.abs(block - plane) <= cfg.snap
+        take = fitted & ((~block_kept & cfg.fill) | near)
+        out[top:bottom][take] = plane[take]
+    return out
+
+
+def _block_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray,
+                  cfg: PlanesConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Each pixel's plane value and the spread of its region about it (NaN where none
+    fits), ``cfg.iterations`` fits, each with the kept pixels near the last plane."""
+    # The margin rows' own vertical arms may reach past the block: cut there (the core
+    # rows' regions lie inside the margin, so theirs are whole).
+    rows = np.arange(disp.shape[0])[:, None]
+    np.minimum(arms[UP], np.minimum(rows, 255).astype(np.uint8), out=arms[UP])
+    np.minimum(arms[DOWN], np.minimum(rows[::-1], 255).astype(np.uint8), out=arms[DOWN])
+    no_limit = np.full_like(arms, 255)  # no right view here: only the left arms count
+    weight = kept.astype(np.float32)
     moments = np.empty(disp.shape + (N_MOMENTS,), np.float32)
     plane = np.empty(disp.shape, np.float32)
     spread = np.empty(disp.shape, np.float32)
@@ -51,11 +86,4 @@ def fit_planes(disp: np.ndarray, labels: np.ndarray, left: np.ndarray,
         plane_values(means, np.float32(cfg.min_share), np.float32(MIN_SPREAD), plane, spread)
         with np.errstate(invalid="ignore"):
             weight = (kept & (np.abs(disp - plane) <= cfg.inlier)).astype(np.float32)
-    out = disp.copy()
-    with np.errstate(invalid="ignore"):
-        fitted = np.isfinite(plane) & (spread <= cfg.max_spread)
-    with np.errstate(invalid="ignore"):
-        near = np.abs(disp - plane) <= cfg.snap
-        take = fitted & ((~kept & cfg.fill) | near)
-    out[take] = plane[take]
-    return out
+    return plane, spread

@@ -83,9 +83,10 @@ def plane_values(means, min_weight, min_spread, out, spread):
 
 @njit(**KERNEL_OPTIONS)
 def cut_arms_at_jumps(arms, disp, jump):
-    """Shorten each arm (left, right, up, down) to end before the first step between
-    neighbours along it whose disparities differ by more than ``jump`` (or where either is
-    not finite): a support region then stays on one surface however alike its colours."""
+    """Shorten each arm (left, right, up, down) to end before the first step of more than
+    ``jump`` between the disparities of the kept pixels along it: a support region then
+    stays on one surface however alike its colours. Pixels without a kept disparity (NaN:
+    rejected by the left-right check) neither end an arm nor count in a step."""
     height, width = disp.shape
     for y in prange(height):
         for x in range(width):
@@ -96,8 +97,9 @@ def cut_arms_at_jumps(arms, disp, jump):
                 length = 0
                 for k in range(1, np.int64(arms[a, y, x]) + 1):
                     d = disp[y + k * dy, x + k * dx]
-                    if not (np.abs(d - prev) <= jump):
-                        break
-                    prev = d
+                    if np.isfinite(d):
+                        if np.isfinite(prev) and not (np.abs(d - prev) <= jump):
+                            break
+                        prev = d
                     length = k
                 arms[a, y, x] = length
