@@ -29,7 +29,7 @@ from vsmatch import confidence, datasets, evaluation, pipeline
 from vsmatch.disparity import VALID
 from vsmatch.peers import sgbm_fill_from_left, sgbm_matcher
 
-DATASETS = ("middlebury2", "middlebury-third", "middlebury2014-quarter", "kitti2015")
+DATASETS = ("middlebury2", "middlebury-third", "middlebury2014-quarter", "kitti2015", "eth3d")
 #: Pixels sampled per scene for the fit (all are used for the measures).
 SAMPLES = 30000
 NEGATIVES = "nothing to match"
