@@ -114,6 +114,40 @@ def test_arms_stop_at_steps_between_neighbours_disparities():
     assert arms[1, 0, 1] == 4  # along the slant
 
 
+def _walked_arms(arms, disp, jump):
+    """The arms cut by walking each one pixel by pixel (what the scans must give)."""
+    arms = arms.copy()
+    height, width = disp.shape
+    for y in range(height):
+        for x in range(width):
+            for a, (dx, dy) in enumerate(((-1, 0), (1, 0), (0, -1), (0, 1))):
+                prev, length = disp[y, x], 0
+                for k in range(1, int(arms[a, y, x]) + 1):
+                    d = disp[y + k * dy, x + k * dx]
+                    if np.isfinite(d):
+                        if np.isfinite(prev) and not abs(d - prev) <= jump:
+                            break
+                        prev = d
+                    length = k
+                arms[a, y, x] = length
+    return arms
+
+
+def test_cut_arms_scans_agree_with_walking_each_arm(rng):
+    height, width = 23, 31
+    for _ in range(4):
+        steps = rng.choice([0, 0, 0.5, 2.0, -3.0], size=(height, width))
+        disp = np.cumsum(steps, axis=1).astype(np.float32)
+        disp[rng.random((height, width)) < 0.2] = np.nan  # rejected pixels
+        ys, xs = np.mgrid[0:height, 0:width]
+        arms = rng.integers(0, 9, size=(4, height, width)).astype(np.uint8)
+        for a, room in enumerate((xs, width - 1 - xs, ys, height - 1 - ys)):
+            arms[a] = np.minimum(arms[a], room)
+        scanned = arms.copy()
+        cut_arms_at_jumps(scanned, disp, np.float32(1.0))
+        assert (scanned == _walked_arms(arms, disp, 1.0)).all()
+
+
 def slanted_pair(rng, height=120, width=200, cell=3, levels=(0, 256)):
     """A textured plane seen at a slant: d = 8 + 0.06 x + 0.04 y (sub-pixel everywhere);
     texture in cells of about ``cell`` pixels, its colours within ``levels``."""

@@ -106,19 +106,26 @@ def difference_field(at_left: np.ndarray, mapped: np.ndarray, ys: np.ndarray,
                      xr: np.ndarray, shape: tuple[int, int], sigma: float) -> np.ndarray:
     """The left minus the mapped right colours of the matched pixels, placed at their
     right pixels and spread smoothly over the right view: a Gaussian-weighted mean of the
-    nearby differences (normalised convolution), float32 (h, w, channels)."""
+    nearby differences (normalised convolution), float32 (h, w, channels). It is smooth
+    over ``sigma`` pixels, so it is summed and blurred on cells of about a quarter of that
+    and resized back (a Gaussian of a tenth of the width is a large kernel)."""
     height, width = shape
     channels = at_left.shape[1]
-    sums = np.zeros((height, width, channels), np.float32)
-    counts = np.zeros((height, width), np.float32)
     differences = np.clip(at_left.astype(np.float32) - mapped.astype(np.float32),
                           -FIELD_CLIP, FIELD_CLIP)  # a wrong match's difference is bounded
-    np.add.at(sums, (ys, xr), differences)
-    np.add.at(counts, (ys, xr), 1.0)
-    blur = dict(ksize=(0, 0), sigmaX=sigma, borderType=cv2.BORDER_REPLICATE)
-    weight = cv2.GaussianBlur(counts, **blur)
-    spread = cv2.GaussianBlur(sums, **blur).reshape(height, width, channels)
+    cell = max(1, int(sigma // 4))
+    grid_h, grid_w = -(-height // cell), -(-width // cell)
+    where = (ys // cell) * grid_w + xr // cell
+    counts = np.bincount(where, minlength=grid_h * grid_w).reshape(grid_h, grid_w)
+    sums = np.stack([np.bincount(where, differences[:, c], minlength=grid_h * grid_w)
+                     for c in range(channels)], axis=-1).reshape(grid_h, grid_w, channels)
+    blur = dict(ksize=(0, 0), sigmaX=sigma / cell, borderType=cv2.BORDER_REPLICATE)
+    weight = cv2.GaussianBlur(counts.astype(np.float32), **blur)
+    spread = cv2.GaussianBlur(sums.astype(np.float32), **blur).reshape(grid_h, grid_w,
+                                                                       channels)
     field = spread / np.maximum(weight, 1e-3)[:, :, None]
+    field = cv2.resize(field, (width, height), interpolation=cv2.INTER_LINEAR)
+    field = field.reshape(height, width, channels)
     # What noise and the map's rounding leave is no field: only its excess is added.
     return (np.sign(field) * np.maximum(np.abs(field) - FIELD_DEAD_BAND, 0)).astype(np.float32)
 

@@ -19,7 +19,8 @@ import numpy as np
 
 from . import aggregation, sensitivity
 from ._kernels.arms import DOWN, UP
-from ._kernels.planes import N_MOMENTS, cut_arms_at_jumps, plane_moments, plane_values
+from ._kernels.planes import (N_MOMENTS, cut_arms_at_jumps, plane_moments, plane_values,
+                              region_sums)
 from .config import ArmsConfig, PlanesConfig
 from .disparity import VALID
 from .images import to_grey
@@ -75,15 +76,15 @@ def _block_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray,
     rows = np.arange(disp.shape[0])[:, None]
     np.minimum(arms[UP], np.minimum(rows, 255).astype(np.uint8), out=arms[UP])
     np.minimum(arms[DOWN], np.minimum(rows[::-1], 255).astype(np.uint8), out=arms[DOWN])
-    no_limit = np.full_like(arms, 255)  # no right view here: only the left arms count
     weight = kept.astype(np.float32)
     moments = np.empty(disp.shape + (N_MOMENTS,), np.float32)
+    scratch, sums = np.empty_like(moments), np.empty_like(moments)
     plane = np.empty(disp.shape, np.float32)
     spread = np.empty(disp.shape, np.float32)
     for _ in range(cfg.iterations):
         plane_moments(disp, weight, moments)
-        means = aggregation.aggregate_cross(moments, arms, no_limit, iterations=1)
-        plane_values(means, np.float32(cfg.min_share), np.float32(MIN_SPREAD), plane, spread)
+        region_sums(moments, arms, scratch, sums)
+        plane_values(sums, np.float32(cfg.min_share), np.float32(MIN_SPREAD), plane, spread)
         with np.errstate(invalid="ignore"):
             weight = (kept & (np.abs(disp - plane) <= cfg.inlier)).astype(np.float32)
     return plane, spread

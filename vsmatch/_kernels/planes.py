@@ -4,8 +4,8 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS
 
 #: Channels of the moments volume: weight, then weight times u, v, u^2, u v, v^2, d, u d, v d,
-#: d^2.
-N_MOMENTS = 10
+#: d^2, and 1 (summed over a region: its pixel count).
+N_MOMENTS = 11
 
 
 @njit(**KERNEL_OPTIONS)
@@ -21,6 +21,7 @@ def plane_moments(disp, weight, out):
         for x in range(width):
             d = disp[y, x]
             w = weight[y, x]
+            out[y, x, 10] = 1.0
             if not np.isfinite(d) or w <= 0:
                 for k in range(10):
                     out[y, x, k] = 0.0
@@ -39,21 +40,21 @@ def plane_moments(disp, weight, out):
 
 
 @njit(**KERNEL_OPTIONS)
-def plane_values(means, min_weight, min_spread, out, spread):
+def plane_values(sums, min_weight, min_spread, out, spread):
     """The least-squares plane d = a u + b v + c through each pixel's support region
-    (``means``: the moments averaged over it), evaluated at the pixel, and the standard
+    (``sums``: the moments summed over it), evaluated at the pixel, and the standard
     deviation of the region's disparities about it (``spread``); NaN where the region's
-    weight is below ``min_weight``. Where its pixels do not span a plane (the variance
-    along u or v below ``min_spread``) a constant is fitted along that axis."""
-    height, width, _ = means.shape
+    weight is below ``min_weight`` of its pixels. Where its pixels do not span a plane (the
+    variance along u or v below ``min_spread``) a constant is fitted along that axis."""
+    height, width, _ = sums.shape
     cx = (width - 1) / 2.0
     cy = (height - 1) / 2.0
     for y in prange(height):
         v0 = y - cy
         for x in range(width):
-            m = means[y, x]
+            m = sums[y, x]
             w = np.float64(m[0])
-            if w < min_weight:
+            if not w > 0 or w < min_weight * m[10]:
                 out[y, x] = np.nan
                 spread[y, x] = np.nan
                 continue
@@ -81,25 +82,76 @@ def plane_values(means, min_weight, min_spread, out, spread):
             spread[y, x] = np.float32(np.sqrt(max(sdd - a * sud - b * svd, 0.0)))
 
 
+@njit(inline="always")
+def _reach(values, jump, out):
+    """out[i] = how far back from i (towards index 0) one may walk along ``values``
+    without a step of more than ``jump`` between consecutive finite values (non-finite
+    ones are walked over and compared with nothing)."""
+    start = 0  # the first index reachable from the current place
+    last = np.float32(np.nan)
+    last_at = -1
+    for i in range(values.shape[0]):
+        v = values[i]
+        if np.isfinite(v):
+            if last_at >= 0 and not (np.abs(v - last) <= jump):
+                start = last_at + 1
+            last = v
+            last_at = i
+        out[i] = i - start
+
+
 @njit(**KERNEL_OPTIONS)
 def cut_arms_at_jumps(arms, disp, jump):
     """Shorten each arm (left, right, up, down) to end before the first step of more than
     ``jump`` between the disparities of the kept pixels along it: a support region then
     stays on one surface however alike its colours. Pixels without a kept disparity (NaN:
-    rejected by the left-right check) neither end an arm nor count in a step."""
+    rejected by the left-right check) neither end an arm nor count in a step. One scan
+    each way per row and per column."""
     height, width = disp.shape
     for y in prange(height):
+        reach = np.empty(width, np.int64)
+        _reach(disp[y], jump, reach)
         for x in range(width):
-            for a in range(4):
-                dx = -1 if a == 0 else (1 if a == 1 else 0)
-                dy = -1 if a == 2 else (1 if a == 3 else 0)
-                prev = disp[y, x]
-                length = 0
-                for k in range(1, np.int64(arms[a, y, x]) + 1):
-                    d = disp[y + k * dy, x + k * dx]
-                    if np.isfinite(d):
-                        if np.isfinite(prev) and not (np.abs(d - prev) <= jump):
-                            break
-                        prev = d
-                    length = k
-                arms[a, y, x] = length
+            arms[0, y, x] = min(np.int64(arms[0, y, x]), reach[x])
+        _reach(disp[y, ::-1], jump, reach)
+        for x in range(width):
+            arms[1, y, x] = min(np.int64(arms[1, y, x]), reach[width - 1 - x])
+    for x in prange(width):
+        column = disp[:, x].copy()
+        reach = np.empty(height, np.int64)
+        _reach(column, jump, reach)
+        for y in range(height):
+            arms[2, y, x] = min(np.int64(arms[2, y, x]), reach[y])
+        _reach(column[::-1], jump, reach)
+        for y in range(height):
+            arms[3, y, x] = min(np.int64(arms[3, y, x]), reach[height - 1 - y])
+
+
+@njit(**KERNEL_OPTIONS)
+def region_sums(src, arms, scratch, out):
+    """``out[y, x]`` = the sum of ``src`` (H, W, C) over pixel (y, x)'s cross region: the
+    horizontal arms (left, right) of the pixels on its vertical arm (up, down). Running
+    sums in float64 along each row, then each column; ``scratch`` holds the row sums."""
+    height, width, channels = src.shape
+    for y in prange(height):
+        sums = np.empty((width + 1, channels))
+        sums[0, :] = 0.0
+        for x in range(width):
+            for k in range(channels):
+                sums[x + 1, k] = sums[x, k] + src[y, x, k]
+        for x in range(width):
+            lo = x - np.int64(arms[0, y, x])
+            hi = x + np.int64(arms[1, y, x]) + 1
+            for k in range(channels):
+                scratch[y, x, k] = sums[hi, k] - sums[lo, k]
+    for x in prange(width):
+        sums = np.empty((height + 1, channels))
+        sums[0, :] = 0.0
+        for y in range(height):
+            for k in range(channels):
+                sums[y + 1, k] = sums[y, k] + scratch[y, x, k]
+        for y in range(height):
+            lo = y - np.int64(arms[2, y, x])
+            hi = y + np.int64(arms[3, y, x]) + 1
+            for k in range(channels):
+                out[y, x, k] = sums[hi, k] - sums[lo, k]
