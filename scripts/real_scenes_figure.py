@@ -2,8 +2,8 @@
 
 A desk (its near top seen at a slant), a white wall behind a ukulele (a raw rig, rectified
 first) and a road (a KITTI 2015 frame): the left view, OpenCV SGBM's disparity (HH, holes
-black) and vsmatch's (default config; what the cloud's confidence threshold leaves out is
-dimmed and hatched), on one colour scale per row with its bar.
+black), vsmatch's (default config) on the same colour scale (its bar on the right), and
+vsmatch's confidence (white = 1; what the cloud keeps, >= 0.95, outlined in green).
 
     python scripts/real_scenes_figure.py [--data-root DIR] [--out docs/real_scenes.jpg]
 """
@@ -58,8 +58,7 @@ def main() -> int:
     for name, left, right, max_disp in pairs(root):
         result = pipeline.run(left, right, max_disp=max_disp)
         low, high = result.search_range
-        ours = preview.disparity_preview(result.disparity, result.confidence,
-                                         DEFAULT_MIN_CONFIDENCE)
+        ours = preview.disparity_preview(result.disparity, None, 0.0)
         width = left.shape[1]
         # SGBM on the same range and the same colours (its holes black).
         raw = sgbm_matcher(high, 3, min_disp=low).compute(left, right).astype(np.float32)
@@ -70,8 +69,13 @@ def main() -> int:
         sgbm = cv2.applyColorMap(np.nan_to_num(scaled).astype(np.uint8), cv2.COLORMAP_TURBO)
         sgbm[~np.isfinite(theirs)] = 0
         bar = ours[:, width:]
+        conf = cv2.cvtColor((255 * result.confidence).astype(np.uint8), cv2.COLOR_GRAY2BGR)
+        kept = (result.confidence >= DEFAULT_MIN_CONFIDENCE).astype(np.uint8)
+        edges = cv2.dilate(kept, np.ones((3, 3), np.uint8)) - kept
+        conf[edges > 0] = (0, 200, 0)
         rows.append(np.hstack([tile(left, name), tile(sgbm, "OpenCV SGBM"),
                                tile(ours[:, :width], "vsmatch default"),
+                               tile(conf, "confidence"),
                                cv2.resize(bar, (bar.shape[1], round(left.shape[0] *
                                                                     TILE_WIDTH / width)))]))
     width = max(r.shape[1] for r in rows)
