@@ -127,31 +127,30 @@ def cut_arms_at_jumps(arms, disp, jump):
             arms[3, y, x] = min(np.int64(arms[3, y, x]), reach[height - 1 - y])
 
 
+@njit(inline="always")
+def _line_sums(values, lo_arms, hi_arms, out):
+    """``out[i]`` = the sum of ``values`` (n, C) over i - lo_arms[i] .. i + hi_arms[i],
+    by running sums in float64."""
+    length, channels = values.shape
+    sums = np.empty((length + 1, channels))
+    sums[0, :] = 0.0
+    for i in range(length):
+        for k in range(channels):
+            sums[i + 1, k] = sums[i, k] + values[i, k]
+    for i in range(length):
+        lo = i - np.int64(lo_arms[i])
+        hi = i + np.int64(hi_arms[i]) + 1
+        for k in range(channels):
+            out[i, k] = sums[hi, k] - sums[lo, k]
+
+
 @njit(**KERNEL_OPTIONS)
 def region_sums(src, arms, scratch, out):
     """``out[y, x]`` = the sum of ``src`` (H, W, C) over pixel (y, x)'s cross region: the
-    horizontal arms (left, right) of the pixels on its vertical arm (up, down). Running
-    sums in float64 along each row, then each column; ``scratch`` holds the row sums."""
-    height, width, channels = src.shape
+    horizontal arms (left, right) of the pixels on its vertical arm (up, down). Each row,
+    then each column of the row sums (``scratch``)."""
+    height, width, _ = src.shape
     for y in prange(height):
-        sums = np.empty((width + 1, channels))
-        sums[0, :] = 0.0
-        for x in range(width):
-            for k in range(channels):
-                sums[x + 1, k] = sums[x, k] + src[y, x, k]
-        for x in range(width):
-            lo = x - np.int64(arms[0, y, x])
-            hi = x + np.int64(arms[1, y, x]) + 1
-            for k in range(channels):
-                scratch[y, x, k] = sums[hi, k] - sums[lo, k]
+        _line_sums(src[y], arms[0, y], arms[1, y], scratch[y])
     for x in prange(width):
-        sums = np.empty((height + 1, channels))
-        sums[0, :] = 0.0
-        for y in range(height):
-            for k in range(channels):
-                sums[y + 1, k] = sums[y, k] + scratch[y, x, k]
-        for y in range(height):
-            lo = y - np.int64(arms[2, y, x])
-            hi = y + np.int64(arms[3, y, x]) + 1
-            for k in range(channels):
-                out[y, x, k] = sums[hi, k] - sums[lo, k]
+        _line_sums(scratch[:, x], arms[2, :, x], arms[3, :, x], out[:, x])
