@@ -265,3 +265,16 @@ def test_noisy_views_switch_the_fit_and_the_planes():
     noisy = adapt_to_noise(cfg, cfg.noise.floor + 5)
     assert noisy.subpixel.fit == "parabola" and not noisy.planes.enabled
     assert adapt_to_noise(cfg, 0.5).subpixel.fit == "equiangular"
+
+
+def test_a_textureless_blob_of_one_value_is_never_trusted():
+    disp = np.full((40, 60), 17.0, np.float32)  # stuck at one value...
+    ys, xs = np.mgrid[0:40, 0:60]
+    disp[:, 30:] = 17 + 0.03 * xs[:, 30:] + 0.01 * ys[:, 30:]  # ... beside a slant
+    texture = np.full(disp.shape, np.log1p(2.0), np.float32)  # both without texture
+    texture[:20, :20] = np.log1p(60.0)  # a textured corner of the flat part
+    conf = np.full(disp.shape, 0.99, np.float32)
+    confidence.cap_flat_blobs(conf, disp, texture)
+    assert (conf[25:, 5:20] < confidence.DEFAULT_MIN_CONFIDENCE).all()
+    assert (conf[:12, :12] == np.float32(0.99)).all()  # textured: left alone
+    assert (conf[:, 40:] == np.float32(0.99)).all()  # a slant is no blob

@@ -181,6 +181,26 @@ def cap_range_ends(confidence: np.ndarray, disparity: np.ndarray, n_disp: int) -
                out=confidence)
 
 
+#: A blob of one value: every disparity of the BLOB_WINDOW square within BLOB_SPREAD px of
+#: one another, where the texture feature (log(1 + the blurred gradient)) is below
+#: BLOB_TEXTURE: a textureless area the matching could not tell apart, stuck at one value
+#: (a real surface fitted by the planes or the sub-pixel fit varies by more).
+BLOB_WINDOW, BLOB_SPREAD, BLOB_TEXTURE = 15, 1e-3, float(np.log1p(8.0))
+
+
+def cap_flat_blobs(confidence: np.ndarray, disparity: np.ndarray,
+                   texture: np.ndarray) -> None:
+    """Cap, in place, the confidence of blobs of one value in textureless areas at
+    :data:`RANGE_END_CONFIDENCE` (below the cloud's threshold)."""
+    finite = np.where(np.isfinite(disparity), disparity, np.nan).astype(np.float32)
+    kernel = np.ones((BLOB_WINDOW, BLOB_WINDOW), np.uint8)
+    high = cv2.dilate(np.nan_to_num(finite, nan=-1e9), kernel)
+    low = cv2.erode(np.nan_to_num(finite, nan=1e9), kernel)
+    blob = (high - low <= BLOB_SPREAD) & (texture < BLOB_TEXTURE)
+    np.minimum(confidence, np.where(blob, RANGE_END_CONFIDENCE, 1.0).astype(np.float32),
+               out=confidence)
+
+
 def matchability(margin: np.ndarray, raw_margin: np.ndarray) -> np.ndarray:
     """0 .. 1 from the mean cost-curve margins around each pixel (:data:`GATE_WINDOW`
     square), of the costs the winner was chosen on and of the aggregated costs before

@@ -215,6 +215,8 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
                                              result.curve)
         result.confidence = confidence.combine(features, result.disparity)
         confidence.cap_range_ends(result.confidence, result.disparity, max_disp + 1)
+        confidence.cap_flat_blobs(result.confidence, result.disparity,
+                                  features[confidence.FEATURES.index("texture")])
     return result
 
 
