@@ -167,7 +167,8 @@ def slanted_pair(rng, height=120, width=200, cell=3, levels=(0, 256)):
 
 
 def test_planes_follow_a_slant_without_steps(rng):
-    left, right, truth = slanted_pair(rng)
+    """Little texture (cells of 12 px, low contrast): where the crosses see a slant."""
+    left, right, truth = slanted_pair(rng, cell=12, levels=(60, 200))
     inner = (slice(10, -10), slice(40, -10))
     errors = {}
     for on in (False, True):
@@ -177,7 +178,7 @@ def test_planes_follow_a_slant_without_steps(rng):
         errors[on] = float(np.mean(np.abs(d - truth)[inner]))
         if on:
             assert metrics.integer_share(d[inner], np.ones(d[inner].shape, bool)) < 0.3
-    assert errors[True] < 0.15 and errors[True] < errors[False]
+    assert errors[True] < 0.095 and errors[True] < errors[False] - 0.005  # 0.085, 0.097
 
 
 def test_rejected_pixels_take_their_regions_plane(rng):

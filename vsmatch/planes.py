@@ -3,7 +3,7 @@
 Cross-based aggregation assumes the surface inside each cross is fronto-parallel, so a road
 or a desk seen at a grazing angle comes out in steps, and pixels the left-right check
 rejected are filled along their row with a constant. Here each pixel's cross region (arms
-grown on the left view, longer than the aggregation's) gets the least-squares plane
+grown on the left view halved, as the band search's, longer than the aggregation's) gets the least-squares plane
 ``d = a x + b y + c`` through the pixels the check kept: the moments of those pixels are
 summed over the region with the aggregation's own kernels (a 9-channel "volume"), and the
 plane solved per pixel. Outliers leave the fit over a second pass. A rejected pixel takes
@@ -17,13 +17,12 @@ import dataclasses
 
 import numpy as np
 
-from . import aggregation, sensitivity
 from ._kernels.arms import DOWN, UP
 from ._kernels.planes import (N_MOMENTS, cut_arms_at_jumps, plane_moments, plane_values,
                               region_sums)
 from .config import ArmsConfig, PlanesConfig
 from .disparity import VALID
-from .images import to_grey
+from .pyramid import arms_from_below
 
 #: Least variance of a region's pixel coordinates along an axis for a slope along it
 #: (a region one or two pixels wide fits a constant along that axis).
@@ -41,9 +40,8 @@ def fit_planes(disp: np.ndarray, labels: np.ndarray, left: np.ndarray,
     """``disp`` with each rejected pixel (``labels`` not VALID) set to its region's plane,
     and each kept one within ``cfg.snap`` of it too (float32; where no plane fits, or the
     region's disparities spread more than ``cfg.max_spread`` about it, nothing changes)."""
-    grad, _ = sensitivity.visual_sensitivity(to_grey(left), direction=False)
-    arms = aggregation.cross_arms(left, None, grad,
-                                  dataclasses.replace(arms_cfg, l2=cfg.l2, kappa=0.0))
+    # Grown on the views halved (a quarter of the work; as accurate here, measured).
+    arms = arms_from_below(left, dataclasses.replace(arms_cfg, l2=cfg.l2, kappa=0.0))
     disp = np.ascontiguousarray(disp, dtype=np.float32)
     kept = (labels == VALID) & np.isfinite(disp)
     if cfg.jump > 0:
