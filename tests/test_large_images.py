@@ -262,3 +262,18 @@ def test_arms_from_below_stay_inside_the_image_and_the_length(rng, height, width
     assert arms.max() == 4 and arms.min() >= 0
     if width > 16:  # long in the flat half, away from its edge
         assert (arms[:, :, : width // 2 - 4] == 4).mean() > 0.5
+
+
+def test_confidence_in_row_blocks_is_the_same_bytes(teddy, monkeypatch):
+    """The confidence is computed in blocks of rows (its features' memory bounded at camera
+    size, issue 26 item 23); each block reads enough rows around it to change nothing."""
+    from vsmatch import confidence
+
+    s = teddy
+    result = pipeline.run(s.left, s.right, max_disp=s.max_disp, config="default")
+    args = (result.disparity, result.labels, s.left, result.curve, s.max_disp + 1)
+    monkeypatch.setattr(confidence, "CONFIDENCE_ROWS", 10**6)
+    whole = confidence.confidence_map(*args)
+    monkeypatch.setattr(confidence, "CONFIDENCE_ROWS", 37)
+    assert confidence.confidence_map(*args).tobytes() == whole.tobytes()
+    assert whole.tobytes() == result.confidence.tobytes()

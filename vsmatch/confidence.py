@@ -126,6 +126,36 @@ def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
     return out
 
 
+#: Rows of the confidence computed at a time, and the rows around them each block reads:
+#: the distance features reach MAX_DISTANCE (chamfer distances of at least 0.955 px a
+#: step: 17 rows), the matchability gate half its window, the blob test half its window.
+#: Blocks give the same bytes as one piece (a test); they bound the features' memory
+#: (48 bytes a pixel) on camera-size pairs.
+CONFIDENCE_ROWS = 512
+CONFIDENCE_MARGIN = 24
+
+
+def confidence_map(disparity: np.ndarray, labels: np.ndarray | None, left: np.ndarray,
+                   curve: dict[str, np.ndarray], n_disp: int) -> np.ndarray:
+    """Each pixel's confidence in [0, 1] (float32): :func:`pixel_features`,
+    :func:`combine`, and the caps at the range's ends and on textureless blobs, in blocks
+    of :data:`CONFIDENCE_ROWS` rows."""
+    height = disparity.shape[0]
+    out = np.empty(disparity.shape, np.float32)
+    for top in range(0, height, CONFIDENCE_ROWS):
+        bottom = min(height, top + CONFIDENCE_ROWS)
+        y0, y1 = max(0, top - CONFIDENCE_MARGIN), min(height, bottom + CONFIDENCE_MARGIN)
+        rows = slice(y0, y1)
+        disp = disparity[rows]
+        features = pixel_features(disp, None if labels is None else labels[rows],
+                                  left[rows], {k: v[rows] for k, v in curve.items()})
+        block = combine(features, disp)
+        cap_range_ends(block, disp, n_disp)
+        cap_flat_blobs(block, disp, features[FEATURES.index("texture")])
+        out[top:bottom] = block[top - y0:bottom - y0]
+    return out
+
+
 def log1p_into(values: np.ndarray, out: np.ndarray) -> None:
     """out = log(1 + values), float32 (H, W), by OpenCV's vectorised log: NumPy's float32
     log1p is not vectorised (its four calls took a third of the stage); within 3e-7 of

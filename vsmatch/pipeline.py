@@ -211,12 +211,8 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
                                                  adapted.arms, adapted.planes)
     result.photometric = correction
     with _stage(result.seconds, "confidence"):
-        features = confidence.pixel_features(result.disparity, result.labels, left,
-                                             result.curve)
-        result.confidence = confidence.combine(features, result.disparity)
-        confidence.cap_range_ends(result.confidence, result.disparity, max_disp + 1)
-        confidence.cap_flat_blobs(result.confidence, result.disparity,
-                                  features[confidence.FEATURES.index("texture")])
+        result.confidence = confidence.confidence_map(result.disparity, result.labels, left,
+                                                      result.curve, max_disp + 1)
     return result
 
 
