@@ -104,7 +104,7 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
     check_outputs([left, right, *calib], outputs, folders=rectified_outputs(rectified_dir))
     camera = None if raw_rig else _calibration(calib, focal, baseline, cx, cy, doffs)
     if raw_rig is not None:
-        _refuse_hand_values(calib, focal, baseline, cx, cy, doffs)
+        _refuse_hand_values(_hand_values(focal, baseline, cx, cy, doffs))
     if (depth_path or cloud_path) and camera is None and raw_rig is None:
         raise click.UsageError("--depth and --cloud need --calib, or --focal and --baseline")
     if (depth_path or cloud_path) and camera is not None:
@@ -209,15 +209,6 @@ def _check_output_path(path: Path) -> None:
                                  param_hint="'-o'")
 
 
-def _refuse_hand_values(calib, focal, baseline, cx, cy, doffs) -> None:
-    """A raw rig's calibration gives the rectified camera; values by hand would be
-    ignored, so they are refused as with a calib.txt."""
-    given = [k for k, v in {"--focal": focal, "--baseline": baseline, "--cx": cx,
-                            "--cy": cy, "--doffs": doffs}.items() if v is not None]
-    if given:
-        raise click.UsageError(f"give --calib or {', '.join(given)}, not both")
-
-
 def _check_depth_fits(camera: geometry.Calibration, calib) -> None:
     problem = camera.depth_problem()
     if problem is not None:
@@ -233,12 +224,9 @@ def _check_calibration_size(camera: geometry.Calibration, path, shape) -> None:
 
 def _calibration(calib, focal, baseline, cx, cy, doffs) -> geometry.Calibration | None:
     """The camera from --calib, or from --focal and --baseline, or None."""
-    by_hand = {"--focal": focal, "--baseline": baseline, "--cx": cx, "--cy": cy,
-               "--doffs": doffs}
-    given = [k for k, v in by_hand.items() if v is not None]
+    given = _hand_values(focal, baseline, cx, cy, doffs)
     if calib:
-        if given:
-            raise click.UsageError(f"give --calib or {', '.join(given)}, not both")
+        _refuse_hand_values(given)
         if len(calib) > 1:
             raise click.UsageError("two --calib files are a ROS camera_info pair of a raw "
                                    "rig; a rectified pair has one calibration file")
@@ -249,6 +237,19 @@ def _calibration(calib, focal, baseline, cx, cy, doffs) -> geometry.Calibration 
         raise click.UsageError("--focal and --baseline go together")
     return geometry.Calibration(focal=focal, baseline=baseline, cx=cx, cy=cy,
                                 doffs=doffs or 0.0)
+
+
+def _hand_values(focal, baseline, cx, cy, doffs) -> list[str]:
+    """The options of a camera given by hand that are set."""
+    return [k for k, v in {"--focal": focal, "--baseline": baseline, "--cx": cx, "--cy": cy,
+                           "--doffs": doffs}.items() if v is not None]
+
+
+def _refuse_hand_values(given: list[str]) -> None:
+    """Beside a calibration file (a calib.txt, or a raw rig's, which gives the rectified
+    camera) values by hand would be ignored: refused."""
+    if given:
+        raise click.UsageError(f"give --calib or {', '.join(given)}, not both")
 
 
 def _estimate_range(left_image, right_image, name, rectified_here: bool):
