@@ -74,22 +74,23 @@ def test_ablation_switches_one_stage_per_row():
                              "voting": {"enabled": True}, "fill": {"directions": 2},
                              "discontinuity": {"enabled": True},
                              "subpixel": {"enabled": True, "median": True},
-                             "arms": {"kappa": 0.0}, "photometric": {"enabled": True}})
+                             "arms": {"kappa": 0.0}, "photometric": {"enabled": True},
+                             "planes": {"enabled": True}})
     rows = list(ablation_configs(base).items())
-    assert len(rows) == 11
+    assert len(rows) == 12
     first = rows[0][1]
     assert not (first.scanline.enabled or first.voting.enabled or first.subpixel.enabled
-                or first.photometric.enabled)
+                or first.photometric.enabled or first.planes.enabled)
     assert rows[1][1].scanline == base.scanline  # the base's own stage values
-    assert rows[6][1] == base  # every stage on again
-    assert rows[7][1].scanline.directions == 8 and "8 directions" in rows[7][0]
-    assert rows[8][1].arms.shrink and "shrinking arm threshold on" in rows[8][0]
-    assert rows[9][1].fill.directions == 16 and "16 directions" in rows[9][0]
-    assert rows[10][1].arms.kappa == 0.5 and "kappa = 0.5" in rows[10][0]
+    assert rows[7][1] == base  # every stage on again
+    assert rows[8][1].scanline.directions == 8 and "8 directions" in rows[8][0]
+    assert rows[9][1].arms.shrink and "shrinking arm threshold on" in rows[9][0]
+    assert rows[10][1].fill.directions == 16 and "16 directions" in rows[10][0]
+    assert rows[11][1].arms.kappa == 0.5 and "kappa = 0.5" in rows[11][0]
     changed = [sum(a != b for a, b in zip(rows[i][1].to_dict().values(),
                                           rows[i + 1][1].to_dict().values()))
-               for i in range(6)]
-    assert changed == [1, 1, 1, 1, 1, 1]
-    for label, cfg in rows[7:]:  # one value away from the base
+               for i in range(7)]
+    assert changed == [1, 1, 1, 1, 1, 1, 1]
+    for label, cfg in rows[8:]:  # one value away from the base
         assert sum(a != b for a, b in zip(cfg.to_dict().values(),
                                           base.to_dict().values())) == 1, label

@@ -287,13 +287,14 @@ def ablation_configs(base: Config) -> dict[str, Config]:
         ("§1-4: cost, aggregation, LR check, fill",
          {"scanline": {"enabled": False}, "voting": {"enabled": False},
           "discontinuity": {"enabled": False}, "subpixel": {"enabled": False, "median": False},
-          "photometric": {"enabled": False}}),
+          "photometric": {"enabled": False}, "planes": {"enabled": False}}),
         ("+ scanline optimisation", section("scanline", enabled=True)),
         ("+ region voting", section("voting", enabled=True)),
         ("+ discontinuity adjustment", section("discontinuity", enabled=True)),
         ("+ sub-pixel", {"subpixel": {"enabled": True, "median": False}}),
         ("+ 3x3 median", {"subpixel": {"enabled": True, "median": True}}),
         ("+ exposure correction", section("photometric", enabled=True)),
+        ("+ slanted planes", section("planes", enabled=True)),
     ]
     configs = {}
     cfg = base
