@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._kernels.aggregate import sum_along_arms, sum_over_arms
+from ._kernels.arms import DOWN, LEFT, RIGHT, UP
 from ._kernels.arms import cross_arms as _cross_arms_kernel
 from .config import ArmsConfig
 from .images import as_channels, colour_change, mirrored
@@ -32,6 +33,18 @@ def cross_arms(image: np.ndarray, theta: np.ndarray | None, sensitivity: np.ndar
                        float(cfg.tau1), float(cfg.tau3), int(cfg.l1), int(cfg.l2),
                        float(cfg.kappa), bool(cfg.shrink), out)
     return out
+
+
+def keep_arms_inside(arms: np.ndarray) -> np.ndarray:
+    """``arms`` (4, H, W) cut, in place, to the pixels the array has on each side (arms
+    made elsewhere, or of a block of rows, may reach past its edge); returned."""
+    height, width = arms.shape[1:]
+    room = np.minimum(np.arange(max(height, width)), 255).astype(np.uint8)
+    np.minimum(arms[LEFT], room[:width], out=arms[LEFT])
+    np.minimum(arms[RIGHT], room[:width][::-1], out=arms[RIGHT])
+    np.minimum(arms[UP], room[:height, None], out=arms[UP])
+    np.minimum(arms[DOWN], room[:height][::-1, None], out=arms[DOWN])
+    return arms
 
 
 #: How the sums over the arms are taken: "running" sums (work per pixel ~ n_disp, scalar),

@@ -33,6 +33,7 @@ import numpy as np
 
 from ._kernels.confidence import cost_curve, logistic
 from .disparity import VALID, MISMATCHED
+from .images import row_blocks
 
 #: The features, in the order of the model's weights (a constant first).
 FEATURES = ("bias", "margin", "margin_sq", "below_mean", "valid", "mismatched",
@@ -140,11 +141,9 @@ def confidence_map(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
     """Each pixel's confidence in [0, 1] (float32): :func:`pixel_features`,
     :func:`combine`, and the caps at the range's ends and on textureless blobs, in blocks
     of :data:`CONFIDENCE_ROWS` rows."""
-    height = disparity.shape[0]
     out = np.empty(disparity.shape, np.float32)
-    for top in range(0, height, CONFIDENCE_ROWS):
-        bottom = min(height, top + CONFIDENCE_ROWS)
-        y0, y1 = max(0, top - CONFIDENCE_MARGIN), min(height, bottom + CONFIDENCE_MARGIN)
+    for top, bottom, y0, y1 in row_blocks(disparity.shape[0], CONFIDENCE_ROWS,
+                                          CONFIDENCE_MARGIN):
         rows = slice(y0, y1)
         disp = disparity[rows]
         features = pixel_features(disp, None if labels is None else labels[rows],
@@ -222,10 +221,11 @@ def cap_flat_blobs(confidence: np.ndarray, disparity: np.ndarray,
                    texture: np.ndarray) -> None:
     """Cap, in place, the confidence of blobs of one value in textureless areas at
     :data:`RANGE_END_CONFIDENCE` (below the cloud's threshold)."""
-    finite = np.where(np.isfinite(disparity), disparity, np.nan).astype(np.float32)
+    finite = np.isfinite(disparity)
     kernel = np.ones((BLOB_WINDOW, BLOB_WINDOW), np.uint8)
-    high = cv2.dilate(np.nan_to_num(finite, nan=-1e9), kernel)
-    low = cv2.erode(np.nan_to_num(finite, nan=1e9), kernel)
+    # An invalid pixel counts as far from every value: no blob around it.
+    high = cv2.dilate(np.where(finite, disparity, -1e9).astype(np.float32), kernel)
+    low = cv2.erode(np.where(finite, disparity, 1e9).astype(np.float32), kernel)
     blob = (high - low <= BLOB_SPREAD) & (texture < BLOB_TEXTURE)
     np.minimum(confidence, np.where(blob, RANGE_END_CONFIDENCE, 1.0).astype(np.float32),
                out=confidence)

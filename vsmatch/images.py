@@ -50,3 +50,13 @@ def mirrored(array: np.ndarray, *, axis: int = -1, pad: int = 0, fill: int = 0) 
         inside[axis] = slice(array.shape[axis], None)
         out[tuple(inside)] = fill
     return out
+
+
+def row_blocks(height: int, rows: int, margin: int, start: int = 0, stop: int | None = None):
+    """``(top, bottom, y0, y1)`` of blocks of at most ``rows`` rows tiling ``start ..
+    stop`` (default: the whole height), each with the ``margin`` rows on either side that
+    the image has: ``y0 .. y1`` is read, ``top .. bottom`` kept."""
+    stop = height if stop is None else stop
+    for top in range(start, stop, rows):
+        bottom = min(stop, top + rows)
+        yield top, bottom, max(0, top - margin), min(height, bottom + margin)

@@ -17,11 +17,12 @@ import dataclasses
 
 import numpy as np
 
-from ._kernels.arms import DOWN, UP
 from ._kernels.planes import (N_MOMENTS, cut_arms_at_jumps, plane_moments, plane_values,
                               region_sums)
+from .aggregation import keep_arms_inside
 from .config import ArmsConfig, PlanesConfig
 from .disparity import VALID
+from .images import row_blocks
 from .pyramid import arms_from_below
 
 #: Least variance of a region's pixel coordinates along an axis for a slope along it
@@ -48,10 +49,7 @@ def fit_planes(disp: np.ndarray, labels: np.ndarray, left: np.ndarray,
         cut_arms_at_jumps(arms, np.where(kept, disp, np.float32(np.nan)),
                           np.float32(cfg.jump))
     out = disp.copy()
-    height = disp.shape[0]
-    for top in range(0, height, PLANE_ROWS):
-        bottom = min(height, top + PLANE_ROWS)
-        y0, y1 = max(0, top - cfg.l2), min(height, bottom + cfg.l2)
+    for top, bottom, y0, y1 in row_blocks(disp.shape[0], PLANE_ROWS, cfg.l2):
         plane, spread = _block_planes(disp[y0:y1], kept[y0:y1],
                                       np.ascontiguousarray(arms[:, y0:y1]), cfg)
         core = slice(top - y0, bottom - y0)
@@ -71,9 +69,7 @@ def _block_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray,
     fits), ``cfg.iterations`` fits, each with the kept pixels near the last plane."""
     # The margin rows' own vertical arms may reach past the block: cut there (the core
     # rows' regions lie inside the margin, so theirs are whole).
-    rows = np.arange(disp.shape[0])[:, None]
-    np.minimum(arms[UP], np.minimum(rows, 255).astype(np.uint8), out=arms[UP])
-    np.minimum(arms[DOWN], np.minimum(rows[::-1], 255).astype(np.uint8), out=arms[DOWN])
+    keep_arms_inside(arms)
     weight = kept.astype(np.float32)
     moments = np.empty(disp.shape + (N_MOMENTS,), np.float32)
     scratch, sums = np.empty_like(moments), np.empty_like(moments)

@@ -20,11 +20,10 @@ import cv2
 import numpy as np
 
 from . import aggregation, cost, noise, optimization, refinement, sensitivity
-from ._kernels.arms import DOWN, RIGHT
 from ._kernels.band import RUN, band_aggregate, band_costs, band_winners, search_band
 from .config import ArmsConfig, Config
 from .disparity import VALID
-from .images import to_grey
+from .images import row_blocks, to_grey
 
 #: Rows refined at a time at a fine level. The result does not depend on it (every pixel
 #: reads only its cross, inside the margin); it bounds the memory of the per-pixel arrays.
@@ -152,9 +151,8 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
     if cfg.pyramid.scanline and cfg.scanline.enabled:
         _refine_with_scanline(blocks, left, right, cfg, out)
         return out
-    for top in range(0, height, REFINE_ROWS):
-        bottom = min(height, top + REFINE_ROWS)
-        terms, arms, lo_block, hi_block, y0 = blocks.block(top, bottom)
+    for top, bottom, y0, y1 in row_blocks(height, REFINE_ROWS, margin):
+        terms, arms, lo_block, hi_block = blocks.block(top, bottom, y0, y1)
         block = search_in_bands(terms, arms, lo_block, hi_block, n_disp, support,
                                 subpixel_fit(cfg))
         out[top:bottom] = block[top - y0:bottom - y0]
@@ -163,17 +161,16 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
 
 class _BandBlocks:
     """What the band search of rows ``top .. bottom`` needs: the cost terms and arms of
-    those rows with a margin that holds every cross and census window, and the bands,
-    empty on the margin rows (they are searched with their own block)."""
+    rows ``y0 .. y1`` (:func:`vsmatch.images.row_blocks` with a margin that holds every
+    cross and census window), and the bands, empty on the margin rows (they are searched
+    with their own block)."""
 
     def __init__(self, left, right, arms_all, lo_all, hi_all, n_disp, cfg, margin):
         self.left, self.right, self.arms_all = left, right, arms_all
         self.lo_all, self.hi_all, self.n_disp = lo_all, hi_all, n_disp
         self.cfg, self.margin = cfg, margin
 
-    def block(self, top: int, bottom: int):
-        height = self.left.shape[0]
-        y0, y1 = max(0, top - self.margin), min(height, bottom + self.margin)
+    def block(self, top: int, bottom: int, y0: int, y1: int):
         views = self.left[y0:y1], self.right[y0:y1]
         grey = [to_grey(v) for v in views]
         # The magnitude for the cost; the arms come from below (arms_from_below).
@@ -187,7 +184,7 @@ class _BandBlocks:
         lo_block, hi_block = self.lo_all[y0:y1].copy(), self.hi_all[y0:y1].copy()
         for rows in (slice(0, top - y0), slice(bottom - y0, None)):
             lo_block[rows], hi_block[rows] = 1, 0
-        return terms, arms, lo_block, hi_block, y0
+        return terms, arms, lo_block, hi_block
 
 
 #: Bytes a row of a band-scanline stripe takes per pixel besides its candidates' 8 (the
@@ -224,9 +221,9 @@ def _refine_with_scanline(blocks: _BandBlocks, left: np.ndarray, right: np.ndarr
         sizes = np.maximum(last - first + 1, 0)
         agg_at = (np.cumsum(sizes) - sizes.ravel()).reshape(sizes.shape)
         agg = np.empty(int(sizes.sum()), dtype=np.float32)
-        for top in range(first_row, stop, REFINE_ROWS):
-            bottom = min(stop, top + REFINE_ROWS)
-            terms, arms, lo_block, hi_block, y0 = blocks.block(top, bottom)
+        for top, bottom, y0, y1 in row_blocks(height, REFINE_ROWS, blocks.margin,
+                                              first_row, stop):
+            terms, arms, lo_block, hi_block = blocks.block(top, bottom, y0, y1)
             store, starts = band_store(terms, lo_block, hi_block, n_disp, cfg.pyramid.support)
             first_block, last_block = candidate_range(lo_block, hi_block, n_disp)
             # Offsets of the core rows in this stripe's store; the margin rows have none.
@@ -260,14 +257,9 @@ def arms_from_below(view: np.ndarray, cfg: ArmsConfig) -> np.ndarray:
     grad, theta = sensitivity.visual_sensitivity(to_grey(small), cfg.kappa != 0)
     half = dataclasses.replace(cfg, l2=max(1, cfg.l2 // 2), l1=max(1, cfg.l1 // 2))
     coarse = aggregation.cross_arms(small, theta, grad, half) * np.uint8(2)
-    height, width = view.shape[:2]
-    arms = upsample_nearest(coarse, (height, width))
     # Doubled, a left or up arm stays inside (2 (c - k) >= 0); a right or down one may
     # pass an odd-sized border by a pixel.
-    room = np.minimum(np.arange(max(height, width))[::-1], 255).astype(np.uint8)
-    np.minimum(arms[RIGHT], room[-width:], out=arms[RIGHT])
-    np.minimum(arms[DOWN], room[-height:, None], out=arms[DOWN])
-    return arms
+    return aggregation.keep_arms_inside(upsample_nearest(coarse, view.shape[:2]))
 
 
 def search_in_bands(terms: tuple, arms: np.ndarray, lo: np.ndarray, hi: np.ndarray,

@@ -305,19 +305,14 @@ def writable(folder: Path) -> bool:
 
 
 def check_writable_folder(path: Path) -> None:
-    folder = check_output_folder(path)
+    """``path`` a file name (not a folder) in an existing, writable folder
+    (:func:`vsmatch.io.check_output_file`, as a one-line usage error)."""
+    try:
+        folder = io.check_output_file(path)
+    except OSError as exc:
+        raise click.ClickException(str(exc)) from None
     if not writable(folder):
         raise click.ClickException(f"{path}: output folder '{folder}' is not writable")
-    if Path(path).is_dir():
-        raise click.ClickException(f"{path}: is a folder, not a file name")
-
-
-def check_output_folder(path: Path) -> Path:
-    """The folder ``path`` goes in, which must exist."""
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise click.ClickException(f"{path}: output folder '{folder}' does not exist")
-    return folder
 
 
 def check_png_range(path, min_disp: int, max_disp: int) -> None:
