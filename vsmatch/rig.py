@@ -108,15 +108,20 @@ def _yaml(path: Path, text: str):
     """The YAML document. Its size with every alias expanded is counted on the parsed
     node graph first (aliases point to one node there): a few hundred bytes of nested
     aliases expand to gigabytes, and such a file is refused before anything is built."""
+    loader = yaml.SafeLoader(text)
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-        if root is not None and _expanded_size(root, {}) > MAX_CALIBRATION_NODES:
+        root = loader.get_single_node()
+        if root is None:
+            return None
+        if _expanded_size(root, {}) > MAX_CALIBRATION_NODES:
             raise CalibrationError(f"{path}: more YAML nodes than a calibration holds "
                                    f"(over {MAX_CALIBRATION_NODES} with its aliases "
                                    "expanded)")
-        return yaml.safe_load(text)
+        return loader.construct_document(root)  # from the nodes parsed once
     except (yaml.YAMLError, RecursionError):
         raise CalibrationError(f"{path}: not valid YAML") from None
+    finally:
+        loader.dispose()
 
 
 def _expanded_size(node, sizes: dict) -> int:
