@@ -22,32 +22,42 @@ class ConfigError(ValueError):
     """A configuration that cannot be used; the message is one line."""
 
 
-def _param(default, lo=None, hi=None, *, choices=None, nullable=False):
-    """A config field with its allowed range (inclusive) or set of choices."""
+def _param(default, lo=None, hi=None, *, choices=None, nullable=False, doc=""):
+    """A config field with its allowed range (inclusive) or set of choices, and one line
+    saying what it does (docs/configuration.md is made from it)."""
     return field(default=default, metadata={"range": (lo, hi), "choices": choices,
-                                            "nullable": nullable})
+                                            "nullable": nullable, "doc": doc})
 
 
 @dataclass(frozen=True)
 class CostConfig:
     """Matching cost (ALGORITHM.md §1–2)."""
 
-    census_width: int = _param(9, 1, 15)
-    census_height: int = _param(7, 1, 15)
+    census_width: int = _param(9, 1, 15, doc="Census window width (odd), pixels.")
+    census_height: int = _param(7, 1, 15, doc="Census window height (odd), pixels.")
     # A neighbour sets its census bit only when darker than the centre by more than this.
-    census_band: float = _param(0.0, 0.0, 64.0)
-    lambda_census: float = _param(30.0, 0.01, 1000.0)
+    census_band: float = _param(0.0, 0.0, 64.0, doc=(
+        "A neighbour sets its census bit only when darker than the centre by more than this "
+        "(grey levels)."))
+    lambda_census: float = _param(30.0, 0.01, 1000.0, doc=(
+        "Scale of the census term, 1 − exp(−c / λ): smaller saturates sooner."))
     # None switches a term off.
-    lambda_gradient: float | None = _param(None, 0.01, 10000.0, nullable=True)
-    lambda_ad: float | None = _param(None, 0.01, 1000.0, nullable=True)
+    lambda_gradient: float | None = _param(None, 0.01, 10000.0, nullable=True, doc=(
+        "Scale of the gradient (visual sensitivity) term; null switches it off."))
+    lambda_ad: float | None = _param(None, 0.01, 1000.0, nullable=True, doc=(
+        "Scale of the colour (absolute difference) term; null switches it off."))
     # Weight of the colour term (set by the photometric stage when its residual is large).
-    ad_weight: float = _param(1.0, 0.0, 1.0)
+    ad_weight: float = _param(1.0, 0.0, 1.0, doc=(
+        "Weight of the colour term (the photometric stage lowers it where colours disagree)."))
     # The colour term compares colours less their mean over a box this many pixels wide
     # (odd); 0 compares them as they are. Real cameras differ in vignetting and colour
     # response, which a plain difference takes for evidence on textureless surfaces.
-    ad_mean_box: int = _param(0, 0, 255)
+    ad_mean_box: int = _param(0, 0, 255, doc=(
+        "Compare colours less their mean over a box this wide (odd); 0 compares them as they "
+        "are."))
     # Gaussian sigma applied to both views before every stage; 0 = off.
-    presmooth_sigma: float = _param(0.0, 0.0, 5.0)
+    presmooth_sigma: float = _param(0.0, 0.0, 5.0, doc=(
+        "Gaussian blur of both views before every stage; 0 is off."))
 
 
 @dataclass(frozen=True)
@@ -59,44 +69,57 @@ class NoiseConfig:
     thresholds and lambdas grow with the noise (``vsmatch.noise.adapt_to_noise``).
     """
 
-    adapt: bool = _param(False)
-    floor: float = _param(2.5, 0.0, 50.0)
-    ramp: float = _param(1.0, 0.01, 50.0)
-    tau_per_sigma: float = _param(2.0, 0.0, 20.0)
-    lambda_per_sigma: float = _param(0.0, 0.0, 10.0)
-    smooth_per_sigma: float = _param(0.0, 0.0, 1.0)
-    band_per_sigma: float = _param(0.0, 0.0, 10.0)
+    adapt: bool = _param(False, doc="Adapt to the estimated image noise.")
+    floor: float = _param(2.5, 0.0, 50.0, doc=(
+        "Noise (grey levels) up to which nothing changes."))
+    ramp: float = _param(1.0, 0.01, 50.0, doc=(
+        "Grey levels over which the changes fade in above the floor."))
+    tau_per_sigma: float = _param(2.0, 0.0, 20.0, doc=(
+        "Arm colour thresholds grow by this per grey level of noise."))
+    lambda_per_sigma: float = _param(0.0, 0.0, 10.0, doc=(
+        "Cost lambdas grow by this share per grey level of noise."))
+    smooth_per_sigma: float = _param(0.0, 0.0, 1.0, doc=(
+        "Gaussian smoothing of the views per grey level of noise."))
+    band_per_sigma: float = _param(0.0, 0.0, 10.0, doc=(
+        "Census band grows by this per grey level of noise."))
     #: The longest arm (arms.l2) on noisy views, reached as the other changes fade in;
     #: 0 keeps arms.l2. Noise needs longer arms to average out than clean views do.
-    arms_l2: int = _param(0, 0, 255)
+    arms_l2: int = _param(0, 0, 255, doc="Longest arm on noisy views (0 keeps arms.l2).")
     #: The sub-pixel fit on noisy views ("same": the config's): the parabola averages the
     #: noise of three costs, the equiangular fit follows the smallest.
-    subpixel_fit: str = _param("same", choices=("same", "parabola", "equiangular", "blend"))
+    subpixel_fit: str = _param("same", choices=("same", "parabola", "equiangular", "blend"),
+                               doc="Sub-pixel fit on noisy views; same keeps subpixel.fit.")
     #: Whether the slanted planes stay on for noisy views.
-    planes: bool = _param(True)
+    planes: bool = _param(True, doc="Keep the slanted planes on noisy views.")
 
 
 @dataclass(frozen=True)
 class ArmsConfig:
     """Direction-guided cross arms (ALGORITHM.md §3)."""
 
-    tau1: float = _param(20.0, 0.0, 255.0)
-    tau2: float = _param(20.0, 0.0, 255.0)
-    tau3: float = _param(6.0, 0.0, 255.0)
-    l1: int = _param(17, 1, 255)
-    l2: int = _param(34, 1, 255)
-    kappa: float = _param(0.0, -1.0, 10.0)
-    g_sat: float = _param(200.0, 1.0, 2000.0)
+    tau1: float = _param(20.0, 0.0, 255.0, doc="Colour threshold of an arm's first l1 pixels.")
+    tau2: float = _param(20.0, 0.0, 255.0, doc=(
+        "Colour threshold between the arm's pixel and its neighbour."))
+    tau3: float = _param(6.0, 0.0, 255.0, doc="Colour threshold beyond l1 pixels.")
+    l1: int = _param(17, 1, 255, doc="Arm length up to which tau1 applies, pixels.")
+    l2: int = _param(34, 1, 255, doc="Longest arm, pixels.")
+    kappa: float = _param(0.0, -1.0, 10.0, doc=(
+        "How much the gradient direction steers the arms (0: plain crosses)."))
+    g_sat: float = _param(200.0, 1.0, 2000.0, doc=(
+        "Gradient magnitude at which the direction steers fully."))
     # The colour threshold falls linearly with the arm's length, tau1 (1 - k / l2), as in
     # the authors' published code.
-    shrink: bool = _param(False)
+    shrink: bool = _param(False, doc=(
+        "The colour threshold falls linearly with the arm's length, tau1 (1 − k / l2) (the "
+        "authors' published code)."))
 
 
 @dataclass(frozen=True)
 class AggregationConfig:
     """Support-region aggregation; 0 iterations switches it off."""
 
-    iterations: int = _param(4, 0, 16)
+    iterations: int = _param(4, 0, 16, doc=(
+        "Passes of cross aggregation (horizontal then vertical); 0 switches it off."))
 
 
 @dataclass(frozen=True)
@@ -107,32 +130,39 @@ class ScanlineConfig:
     in one image, by ``reduce_both`` where it does in both.
     """
 
-    enabled: bool = _param(False)
-    p1: float = _param(1.0, 0.0, 100.0)
-    p2: float = _param(3.0, 0.0, 100.0)
-    tau: float = _param(15.0, 0.0, 255.0)
-    reduce_one: float = _param(4.0, 1.0, 100.0)
-    reduce_both: float = _param(10.0, 1.0, 100.0)
+    enabled: bool = _param(False, doc=(
+        "Scanline optimisation between aggregation and the winner."))
+    p1: float = _param(1.0, 0.0, 100.0, doc="Penalty for a disparity change of 1 along a path.")
+    p2: float = _param(3.0, 0.0, 100.0, doc="Penalty for a larger change.")
+    tau: float = _param(15.0, 0.0, 255.0, doc=(
+        "Colour change at which the penalties are reduced."))
+    reduce_one: float = _param(4.0, 1.0, 100.0, doc=(
+        "Divide P1, P2 by this where the colour changes in one view."))
+    reduce_both: float = _param(10.0, 1.0, 100.0, doc=(
+        "Divide P1, P2 by this where it changes in both."))
     # 4: along rows and columns; 8: the diagonals too (as SGM's usual eight paths).
-    directions: int = _param(4, choices=(4, 8))
+    directions: int = _param(4, choices=(4, 8), doc=(
+        "4: rows and columns; 8: the diagonals too."))
 
 
 @dataclass(frozen=True)
 class ConsistencyConfig:
     """Left-right check."""
 
-    enabled: bool = _param(True)
-    tolerance: int = _param(1, 0, 16)
+    enabled: bool = _param(True, doc="Left–right check.")
+    tolerance: int = _param(1, 0, 16, doc=(
+        "Largest left–right difference (pixels) still consistent."))
 
 
 @dataclass(frozen=True)
 class VotingConfig:
     """Iterative region voting on the pixels rejected by the left-right check (§5.2)."""
 
-    enabled: bool = _param(False)
-    iterations: int = _param(5, 1, 20)
-    min_votes: int = _param(20, 0, 10000)
-    min_share: float = _param(0.4, 0.0, 1.0)
+    enabled: bool = _param(False, doc="Region voting on the pixels the check rejected.")
+    iterations: int = _param(5, 1, 20, doc="Voting rounds.")
+    min_votes: int = _param(20, 0, 10000, doc="Consistent pixels a region needs to vote.")
+    min_share: float = _param(0.4, 0.0, 1.0, doc=(
+        "Share of the votes the winning disparity needs."))
 
 
 @dataclass(frozen=True)
@@ -143,9 +173,11 @@ class FillConfig:
     "proper interpolation" of §5.3.
     """
 
-    enabled: bool = _param(True)
-    directions: int = _param(2, choices=(2, 8, 16))
-    max_search: int = _param(64, 1, 4096)
+    enabled: bool = _param(True, doc="Fill the pixels still rejected.")
+    directions: int = _param(2, choices=(2, 8, 16), doc=(
+        "2: along the row; 8 or 16: the paper's proper interpolation."))
+    max_search: int = _param(64, 1, 4096, doc=(
+        "How far (pixels) to look for a consistent neighbour."))
 
 
 @dataclass(frozen=True)
@@ -153,18 +185,20 @@ class DiscontinuityConfig:
     """Depth-discontinuity adjustment (§5.4): at a jump of more than ``jump`` pixels, take
     the horizontal neighbour's disparity where its cost is lower."""
 
-    enabled: bool = _param(False)
-    jump: float = _param(1.0, 0.0, 64.0)
+    enabled: bool = _param(False, doc="Depth-discontinuity adjustment.")
+    jump: float = _param(1.0, 0.0, 64.0, doc="Disparity step (pixels) taken as a depth edge.")
 
 
 @dataclass(frozen=True)
 class SubpixelConfig:
     """Sub-pixel parabola fit (§5.5) and the 3x3 median after it."""
 
-    enabled: bool = _param(False)
-    median: bool = _param(False)
+    enabled: bool = _param(False, doc="Sub-pixel fit on the aggregated costs.")
+    median: bool = _param(False, doc="3×3 median after the fit.")
     # "parabola", or "equiangular" (a symmetric V: census-like costs, less pixel-locking).
-    fit: str = _param("parabola", choices=("parabola", "equiangular", "blend"))
+    fit: str = _param("parabola", choices=("parabola", "equiangular", "blend"), doc=(
+        "parabola; equiangular (a symmetric V: census-like costs, less locking to whole "
+        "pixels); blend (their mean)."))
 
 
 @dataclass(frozen=True)
@@ -175,20 +209,28 @@ class PlanesConfig:
     the last plane; a rejected pixel takes its plane's value, a kept one too when within
     ``snap`` px of it. Regions with less than ``min_share`` of kept pixels fit none."""
 
-    enabled: bool = _param(False)
-    l2: int = _param(40, 1, 255)
-    iterations: int = _param(2, 1, 10)
-    inlier: float = _param(1.0, 0.0, 100.0)
-    snap: float = _param(1.0, 0.0, 100.0)
-    min_share: float = _param(0.2, 0.0, 1.0)
+    enabled: bool = _param(False, doc="Slanted planes over depth-aware support regions.")
+    l2: int = _param(40, 1, 255, doc=(
+        "Longest arm of a plane's region, pixels (on the halved view)."))
+    iterations: int = _param(2, 1, 10, doc=(
+        "Least-squares fits, each on the pixels within inlier of the last."))
+    inlier: float = _param(1.0, 0.0, 100.0, doc=(
+        "Distance (pixels) to the plane of the pixels the next fit uses."))
+    snap: float = _param(1.0, 0.0, 100.0, doc=(
+        "A kept pixel within this (pixels) of its plane takes the plane's value."))
+    min_share: float = _param(0.2, 0.0, 1.0, doc=(
+        "Share of a region's pixels that must be left–right consistent for a plane."))
     # A region whose kept disparities lie farther than this (standard deviation, px) from
     # their plane is no plane (it spans a depth edge): nothing changes there.
-    max_spread: float = _param(100.0, 0.0, 100.0)
+    max_spread: float = _param(100.0, 0.0, 100.0, doc=(
+        "A region spread more than this (pixels) about its plane fits none (a depth edge)."))
     # Arms end before a step of more than this many px between neighbours' disparities
     # (0: colour alone decides, as in aggregation).
-    jump: float = _param(0.0, 0.0, 100.0)
+    jump: float = _param(0.0, 0.0, 100.0, doc=(
+        "Arms end before a step larger than this between consistent neighbours (0: colour "
+        "alone)."))
     # Whether rejected pixels take their plane (else they keep the fill's value).
-    fill: bool = _param(True)
+    fill: bool = _param(True, doc="Rejected pixels take their plane (else the fill's value).")
 
 
 @dataclass(frozen=True)
@@ -200,14 +242,18 @@ class PyramidConfig:
     of at most ``support`` pixels; with ``scanline``, the scanline optimisation (the
     ``scanline`` section's values) runs over those bands before the winner is taken."""
 
-    max_row_cells: int = _param(262144, 1024, 1 << 40)
-    max_cells: int = _param(0, 0, 1 << 50)
-    scanline: bool = _param(False)
-    band: int = _param(0, 0, 64)
-    support: int = _param(8, 1, 255)
+    max_row_cells: int = _param(262144, 1024, 1 << 40, doc=(
+        "Halve the views while a row holds more width × disparity cells."))
+    max_cells: int = _param(0, 0, 1 << 50, doc=(
+        "Halve at least once above this many width × height × disparity cells (0: no "
+        "limit)."))
+    scanline: bool = _param(False, doc=(
+        "Scanline optimisation over the bands at the finer levels."))
+    band: int = _param(0, 0, 64, doc="Pixels added on each side of a band.")
+    support: int = _param(8, 1, 255, doc="Longest arm of the band search's crosses, pixels.")
     # Halve at least this many times, whatever the row (while 64 columns and 16
     # disparities remain): the ``fast`` config's coarse-to-fine at every size.
-    min_levels: int = _param(0, 0, 4)
+    min_levels: int = _param(0, 0, 4, doc="Halve at least this often, whatever the size.")
 
 
 @dataclass(frozen=True)
@@ -219,14 +265,18 @@ class PhotometricConfig:
     colour difference the map leaves beyond the noise grows from ``fade_from`` to
     ``fade_to`` grey levels."""
 
-    enabled: bool = _param(False)
-    max_width: int = _param(400, 32, 100000)
-    box: int = _param(9, 1, 63)
-    fade_from: float = _param(5.0, 0.0, 255.0)
-    fade_to: float = _param(10.0, 0.0, 255.0)
+    enabled: bool = _param(False, doc="Learn the right view's colour map onto the left's.")
+    max_width: int = _param(400, 32, 100000, doc=(
+        "Width (pixels) of the quick first match the map is learnt from."))
+    box: int = _param(9, 1, 63, doc="Window of the first match's costs, pixels.")
+    fade_from: float = _param(5.0, 0.0, 255.0, doc=(
+        "Colour residual (grey levels) where the colour term starts to fade."))
+    fade_to: float = _param(10.0, 0.0, 255.0, doc="Residual where it is gone.")
     # What the map leaves, spread smoothly (a Gaussian of this many widths) and added to
     # the right view: vignetting and colour responses that differ across the image. 0: off.
-    field_sigma: float = _param(0.0, 0.0, 1.0)
+    field_sigma: float = _param(0.0, 0.0, 1.0, doc=(
+        "What the map leaves, smoothed over this share of the width and added to the right "
+        "view (vignetting); 0 is off."))
 
 
 @dataclass(frozen=True)
@@ -235,10 +285,12 @@ class MemoryConfig:
     volumes and per-pixel arrays, it runs on horizontal stripes that fit, each with
     ``overlap`` extra rows above and below whose results are dropped."""
 
-    max_mb: int = _param(1024, 16, 1 << 20)
-    overlap: int = _param(48, 0, 4096)
+    max_mb: int = _param(1024, 16, 1 << 20, doc=(
+        "Working-memory budget of the full search, MB (--max-memory); stripes above it."))
+    overlap: int = _param(48, 0, 4096, doc="Extra rows above and below each stripe.")
     # Views larger than this are refused from their header, before decoding.
-    max_megapixels: float = _param(200.0, 0.01, 10000.0)
+    max_megapixels: float = _param(200.0, 0.01, 10000.0, doc=(
+        "Views larger than this are refused from their header."))
 
 
 @dataclass(frozen=True)

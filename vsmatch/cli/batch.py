@@ -11,13 +11,16 @@ from .. import batch
 from ..config import load_config
 from ..executors import make_executor
 from .common import (CONFIDENCE_LEVEL, MAX_DISP, announce_compilation, config_option, echo,
-                     friendly_errors, max_memory_option, scheduler_address,
+                     examples, friendly_errors, max_memory_option, scheduler_address,
                      verbosity_options, with_budget)
 
 from .main import main
 
 
-@main.command("batch")
+@main.command("batch", epilog=examples(
+    "vsmatch batch pairs.csv --jobs 2",
+    "vsmatch batch scenes/ -o disparities --format png --max-disp 100",
+    "vsmatch batch drive/ -o disparities --scheduler local:2"))
 @click.argument("source", type=click.Path())
 @click.option("-o", "--out-dir", type=click.Path(file_okay=False), default="vsmatch-out",
               show_default=True, help="For a folder SOURCE: where the disparities go "
@@ -62,12 +65,6 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
 
     Pairs whose output exists are skipped unless --overwrite. A failed pair does not
     stop the others: the failures are listed at the end and the exit status is 1.
-
-    \b
-    Example:
-      vsmatch batch pairs.csv --jobs 2
-      vsmatch batch scenes/ -o disparities --format png --max-disp 100
-      vsmatch batch drive/ -o disparities --scheduler tcp://scheduler-host:8786
     """
     from tqdm import tqdm
 

@@ -8,13 +8,15 @@ import click
 
 from .. import datasets, io
 from ..config import bundled_config_names, load_config
-from .common import (check_outputs, check_outside, data_root_option, echo, friendly_errors,
-                     verbosity_options)
+from .common import (check_outputs, check_outside, data_root_option, echo, examples,
+                     friendly_errors, verbosity_options)
 
 from .main import main
 
 
-@main.command("bench")
+@main.command("bench", epilog=examples(
+    "vsmatch bench",
+    "vsmatch bench --config default --config fast --json bench.json --plot pareto.png"))
 @data_root_option
 @click.option("--config", "configs", multiple=True, metavar="NAME|PATH",
               help="A config to time (repeatable): a bundled one "

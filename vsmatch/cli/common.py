@@ -26,6 +26,11 @@ EXIT_TERMINATED = 143
 EXIT_BROKEN_PIPE = 141
 
 
+def examples(*lines: str) -> str:
+    """A command's epilog: the lines kept as written (Click's ``\\b``), under "Examples"."""
+    return "\b\nExamples:\n" + "\n".join(f"  {line}" for line in lines)
+
+
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised in the main thread so that it unwinds like Ctrl-C: temporaries
     are removed and the worker processes are ended on the way out."""

@@ -7,17 +7,21 @@ from pathlib import Path
 import click
 
 from .. import datasets
-from .common import data_root_option, echo, friendly_errors, verbosity_options
+from .common import data_root_option, echo, examples, friendly_errors, verbosity_options
 
 from .main import main
 
 
-@main.group("datasets")
+@main.group("datasets", epilog=examples(
+    "vsmatch datasets list",
+    "vsmatch datasets download middlebury2014 --resolution Q --to data"))
 def datasets_group():
     """List the benchmarks vsmatch knows, and download them."""
 
 
-@datasets_group.command("list")
+@datasets_group.command("list", epilog=examples(
+    "vsmatch datasets list",
+    "vsmatch datasets list --data-root data"))
 @data_root_option
 @verbosity_options
 @click.pass_context
@@ -37,7 +41,9 @@ def datasets_list(ctx, data_root):
         echo(ctx, f"{name:<25}{status}")
 
 
-@datasets_group.command("download")
+@datasets_group.command("download", epilog=examples(
+    "vsmatch datasets download middlebury2014 --resolution Q --to data",
+    "vsmatch datasets download middlebury2014 --to data --mirror https://example.org/mev3/"))
 @click.argument("dataset", type=click.Choice(["middlebury2014", "kitti2015", "kitti2012"]))
 @click.option("--resolution", type=click.Choice(["Q", "H", "F"]), default="Q",
               show_default=True, help="Middlebury 2014 size: quarter, half or full.")
@@ -50,11 +56,6 @@ def datasets_list(ctx, data_root):
 @friendly_errors
 def datasets_download(ctx, dataset, resolution, to, mirror):
     """Fetch a benchmark into a data root that 'vsmatch eval --data-root' reads.
-
-    \b
-    Example:
-      vsmatch datasets download middlebury2014 --resolution Q --to data
-      vsmatch eval --dataset middlebury2014-quarter --data-root data
     """
     if dataset != "middlebury2014":
         folder = Path(to) / datasets.DATASETS[dataset].folder

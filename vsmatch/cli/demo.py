@@ -7,12 +7,15 @@ from pathlib import Path
 import click
 
 from .. import evaluation, io, pipeline, synthetic
-from .common import announce_compilation, config_option, echo, friendly_errors, verbosity_options
+from .common import (announce_compilation, config_option, echo, examples, friendly_errors,
+                     verbosity_options)
 
 from .main import main
 
 
-@main.command()
+@main.command(epilog=examples(
+    "vsmatch demo",
+    "vsmatch demo -o /tmp/demo"))
 @click.option("-o", "--out-dir", type=click.Path(file_okay=False), default="vsmatch-demo",
               show_default=True, help="Folder for the pair, the disparity and the error image.")
 @config_option

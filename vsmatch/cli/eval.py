@@ -10,13 +10,16 @@ import click
 from .. import datasets, evaluation, io
 from ..config import load_config
 from ..peers import PEER_METHODS
-from .common import (check_outputs, check_outside, data_root_option, echo, friendly_errors,
-                     verbose, verbosity_options)
+from .common import (check_outputs, check_outside, data_root_option, echo, examples,
+                     friendly_errors, verbose, verbosity_options)
 
 from .main import main
 
 
-@main.command("eval")
+@main.command("eval", epilog=examples(
+    "vsmatch eval --dataset middlebury2 --method paper --method default",
+    "vsmatch eval --dataset middlebury2014-quarter --method default --method opencv-sgbm",
+    "vsmatch eval --dataset middlebury2 --noise 0.02,0.05,0.10,0.15 --seeds 3"))
 @click.option("--dataset", type=click.Choice(list(datasets.DATASETS)),
               default="middlebury2", show_default=True)
 @data_root_option
@@ -57,11 +60,6 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, figure_pa
 
     Middlebury: bad pixels (bad 1.0; bad 2.0 for Middlebury 2014) on nonocc and all
     (and disc); KITTI: D1 (2015) or out-3 (2012). Every measure goes in --json.
-
-    \b
-    Example:
-      vsmatch eval --dataset middlebury2 --method census --method paper --json t1.json
-      vsmatch eval --dataset middlebury2014-quarter --method default --method opencv-sgbm
     """
     from tqdm import tqdm
 

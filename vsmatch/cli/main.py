@@ -10,6 +10,7 @@ import click
 from .. import __version__
 from .common import OneLineErrors, on_sigterm
 
+
 @click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="vsmatch")
 @click.option("-q", "--quiet", is_flag=True, help="Print only errors.")

@@ -5,12 +5,16 @@ from __future__ import annotations
 import click
 
 from .. import io, rig
-from .common import ALPHA, check_outputs, echo, friendly_errors, verbose, verbosity_options
+from .common import (ALPHA, check_outputs, echo, examples, friendly_errors, verbose,
+                     verbosity_options)
+
 from .main import main
 from .run import rectified_outputs, write_rectified
 
 
-@main.command()
+@main.command(epilog=examples(
+    "vsmatch rectify raw_l.png raw_r.png --calib stereo.yaml --to rect/",
+    "vsmatch rectify l.png r.png --calib left.yaml --calib right.yaml --to rect/"))
 @click.argument("left", type=click.Path(dir_okay=False))
 @click.argument("right", type=click.Path(dir_okay=False))
 @click.option("--calib", type=click.Path(dir_okay=False), multiple=True, required=True,
@@ -28,11 +32,6 @@ from .run import rectified_outputs, write_rectified
 def rectify(ctx, left, right, calib, folder, alpha):
     """Rectify a raw stereo pair: im0.png, im1.png and a Middlebury-style calib.txt of
     the rectified rig, which 'vsmatch run --calib' reads.
-
-    \b
-    Example:
-      vsmatch rectify raw_l.png raw_r.png --calib stereo.yaml --to rectified
-      vsmatch run rectified/im0.png rectified/im1.png -o d.pfm --calib rectified/calib.txt
     """
     check_outputs([left, right, *calib], [], folders=rectified_outputs(folder))
     raw_rig = rig.read_rig(calib)

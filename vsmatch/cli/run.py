@@ -10,15 +10,17 @@ import numpy as np
 from .. import confidence, geometry, io, pipeline, preview, rig, search_range
 from ..confidence import DEFAULT_MIN_CONFIDENCE
 from ..config import load_config
-from .common import (ALPHA, CONFIDENCE_LEVEL, FINITE, MAX_DISP, POSITIVE,
-                     announce_compilation, check_outputs, check_png_range, config_option,
-                     echo, friendly_errors, max_memory_option, verbose, verbosity_options,
-                     with_budget)
+from .common import (ALPHA, CONFIDENCE_LEVEL, FINITE, MAX_DISP, POSITIVE, announce_compilation,
+                     check_outputs, check_png_range, config_option, echo, examples,
+                     friendly_errors, max_memory_option, verbose, verbosity_options, with_budget)
 
 from .main import main
 
 
-@main.command()
+@main.command(epilog=examples(
+    "vsmatch run left.png right.png -o disp.pfm --preview disp.png",
+    "vsmatch run im0.png im1.png --calib calib.txt -o d.pfm --cloud scene.ply",
+    "vsmatch run raw_l.png raw_r.png --calib stereo.yaml -o d.pfm --cloud c.ply"))
 @click.argument("left", type=click.Path(dir_okay=True))
 @click.argument("right", type=click.Path(dir_okay=True))
 @click.option("-o", "--output", type=click.Path(), required=True,
@@ -78,11 +80,6 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
         doffs, depth_path, cloud_path, max_depth, preview_path, confidence_path,
         min_confidence, config, max_memory):
     """Compute the left-view disparity of a rectified stereo pair.
-
-    \b
-    Example:
-      vsmatch run imL.png imR.png -o disp.pfm --max-disp 59
-      vsmatch run im0.png im1.png -o disp.pfm --calib calib.txt --cloud scene.ply
     """
     out = Path(output)
     _check_output_path(out)

@@ -12,8 +12,9 @@ import numpy as np
 
 from .. import io
 from ..matcher import StereoMatcher
-from .common import (MAX_DISP, check_outside, check_outputs, config_option, echo,
+from .common import (MAX_DISP, check_outputs, check_outside, config_option, echo, examples,
                      friendly_errors, verbose, verbosity_options)
+
 from .main import main
 
 #: Output containers and the codec OpenCV writes them with here.
@@ -121,7 +122,10 @@ def video_frame_count(path: str) -> int:
     return count
 
 
-@main.command()
+@main.command(epilog=examples(
+    "vsmatch video left.mp4 right.mp4 -o disparity.avi --calib stereo.yaml",
+    "vsmatch video both.mp4 --side-by-side -o d.mp4 --frames frames/",
+    "vsmatch video 0 1 -o live.avi --calib stereo.yaml --config fast"))
 @click.argument("left")
 @click.argument("right", required=False)
 @click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
@@ -152,11 +156,6 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
     given by index) and write the disparity as a colour video.
 
     Frames of one video without a partner in the other are counted as failed (exit 1).
-
-    \b
-    Example:
-      vsmatch video left.mp4 right.mp4 -o disparity.avi --calib stereo.yaml
-      vsmatch video both.mp4 --side-by-side -o disparity.mp4 --frames out/
     """
     from tqdm import tqdm
 
