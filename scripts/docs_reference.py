@@ -52,17 +52,17 @@ def _allowed(spec: dataclasses.Field) -> str:
 
 def config_table() -> str:
     """One table per section: key, allowed values, the value in each bundled config."""
-    configs = {name: load_config(name) for name in BUNDLED}
+    configs = {"built-in": Config(), **{name: load_config(name) for name in BUNDLED}}
     lines = []
     for section in dataclasses.fields(Config):
         lines += [f"### `{section.name}`", "",
                   _cell(section.default_factory.__doc__.strip().split("\n\n")[0]), "",
-                  "| key | allowed | " + " | ".join(f"`{n}`" for n in BUNDLED)
+                  "| key | allowed | " + " | ".join(f"`{n}`" for n in configs)
                   + " | what it does |",
-                  "| --- | --- | " + " | ".join("---" for _ in BUNDLED) + " | --- |"]
+                  "| --- | --- | " + " | ".join("---" for _ in configs) + " | --- |"]
         for spec in dataclasses.fields(section.default_factory):
-            values = [_value(getattr(getattr(configs[n], section.name), spec.name))
-                      for n in BUNDLED]
+            values = [_value(getattr(getattr(cfg, section.name), spec.name))
+                      for cfg in configs.values()]
             lines.append(f"| `{section.name}.{spec.name}` | {_allowed(spec)} | "
                          + " | ".join(values) + f" | {_cell(spec.metadata['doc'])} |")
         lines.append("")

@@ -94,3 +94,16 @@ def test_ablation_switches_one_stage_per_row():
     for label, cfg in rows[8:]:  # one value away from the base
         assert sum(a != b for a, b in zip(cfg.to_dict().values(),
                                           base.to_dict().values())) == 1, label
+
+
+def test_a_file_can_start_from_a_bundled_config(tmp_path):
+    mine = tmp_path / "mine.yaml"
+    mine.write_text("base: default\narms: {l2: 30}\nplanes: {enabled: false}\n")
+    cfg = load_config(mine)
+    default = load_config("default")
+    assert cfg.arms.l2 == 30 and not cfg.planes.enabled
+    assert cfg.cost == default.cost and cfg.photometric == default.photometric
+    assert load_config(tmp_path / "mine.yaml").arms.tau1 == default.arms.tau1
+    mine.write_text("base: nope\n")
+    with pytest.raises(ConfigError, match="base must name a bundled config"):
+        load_config(mine)

@@ -212,3 +212,12 @@ def test_version_matches_the_changelog():
     assert f'version = "{vsmatch.__version__}"' in pyproject
     result = click.testing.CliRunner().invoke(main, ["--version"])
     assert vsmatch.__version__ in result.output
+
+
+def test_the_generated_references_are_current():
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, str(ROOT / "scripts" / "docs_reference.py"),
+                           "--check"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stdout + done.stderr

@@ -470,8 +470,18 @@ def _parse_config(name_or_path: str) -> Config:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
         raise ConfigError(f"config {origin} is not valid YAML{where}") from None
+    base = None
+    if isinstance(data, dict) and "base" in data:
+        # `base: default` merges the file over a bundled config instead of the built-in values.
+        data = dict(data)
+        name = data.pop("base")
+        if not isinstance(name, str) or name not in bundled_config_names():
+            names = ", ".join(bundled_config_names())
+            raise ConfigError(f"{origin}: base must name a bundled config ({names}), not "
+                              f"{quote(name)}")
+        base = _bundled_config(name)
     try:
-        return config_from_dict(data)
+        return config_from_dict(data, base=base)
     except ConfigError as exc:
         raise ConfigError(f"{origin}: {exc}") from None
 

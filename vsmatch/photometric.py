@@ -1,4 +1,4 @@
-"""Exposure and lighting differences between the views (README, "Exposure and lighting").
+"""Exposure and lighting differences between the views (docs/results.md, "Exposure and lighting").
 
 Census and the gradient direction do not mind a change of exposure; the colour term
 (absolute differences) and the gradient magnitude do. Middlebury 2014's ``E`` and ``L``
