@@ -8,10 +8,13 @@ import threading
 import click
 
 from .. import __version__
-from .common import OneLineErrors, on_sigterm
+from .common import OneLineErrors, examples, on_sigterm
 
 
-@click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]},
+             epilog=examples("vsmatch demo",
+                             "vsmatch run left.png right.png -o disp.pfm --preview disp.png",
+                             "vsmatch run --help"))
 @click.version_option(__version__, prog_name="vsmatch")
 @click.option("-q", "--quiet", is_flag=True, help="Print only errors.")
 @click.option("-v", "--verbose", is_flag=True,
