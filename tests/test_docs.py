@@ -223,3 +223,12 @@ def test_the_generated_references_are_current():
     done = subprocess.run([sys.executable, str(ROOT / "scripts" / "docs_reference.py"),
                            "--check"], capture_output=True, text=True)
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_every_local_link_of_the_pages_exists():
+    for page in PAGES:
+        text = page.read_text(encoding="utf-8")
+        for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", text):
+            if "://" in target:
+                continue
+            assert (page.parent / target).exists(), f"{page.name}: link to {target}"
