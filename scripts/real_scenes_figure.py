@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 
 from vsmatch import datasets, pipeline, preview, rig
-from vsmatch.confidence import DEFAULT_MIN_CONFIDENCE
+from vsmatch.confidence import DEFAULT_MIN_CONFIDENCE, out_of_view
 from vsmatch.peers import sgbm_matcher
 
 #: Width of each tile in the picture.
@@ -58,7 +58,9 @@ def main() -> int:
     for name, left, right, max_disp in pairs(root):
         result = pipeline.run(left, right, max_disp=max_disp)
         low, high = result.search_range
-        ours = preview.disparity_preview(result.disparity, None, 0.0)
+        # Pixels whose match would lie outside the right view black, as SGBM leaves them.
+        shown = np.where(out_of_view(result.disparity), np.inf, result.disparity)
+        ours = preview.disparity_preview(shown.astype(np.float32), None, 0.0)
         width = left.shape[1]
         # SGBM on the same range and the same colours (its holes black).
         raw = sgbm_matcher(high, 3, min_disp=low).compute(left, right).astype(np.float32)
