@@ -39,8 +39,18 @@ class Terminated(KeyboardInterrupt):
 def on_sigterm(signum, frame):
     # A second SIGTERM while the first unwinds (or while Python shuts its threads down)
     # would raise inside that clean-up and print a traceback: it is ignored from here on.
+    # First by a handler that does nothing, which consumes a second signal caught while
+    # this one was being handled (with SIG_IGN at once, Python would later raise OSError
+    # "ignored due to race condition" for it, wherever it next checked for signals); then
+    # by SIG_IGN, which Python keeps while it shuts down (its own handlers it resets to
+    # the default, which would kill the process on a late second signal).
+    signal.signal(signal.SIGTERM, ignore_signal)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     raise Terminated()
+
+
+def ignore_signal(signum, frame) -> None:
+    """A signal handler that does nothing."""
 
 
 def stop(exc: BaseException) -> None:
