@@ -15,10 +15,9 @@ from pathlib import Path
 import click
 
 from vsmatch.cli.main import main
-from vsmatch.config import Config, load_config
+from vsmatch.config import Config, bundled_config_names, load_config
 
 ROOT = Path(__file__).resolve().parents[1]
-BUNDLED = ("census", "paper", "default", "fast")
 
 
 #: Taken by every command (before or after its name): described once, under `vsmatch`.
@@ -52,7 +51,8 @@ def _allowed(spec: dataclasses.Field) -> str:
 
 def config_table() -> str:
     """One table per section: key, allowed values, the value in each bundled config."""
-    configs = {"built-in": Config(), **{name: load_config(name) for name in BUNDLED}}
+    configs = {"built-in": Config(),
+               **{name: load_config(name) for name in bundled_config_names()}}
     lines = []
     for section in dataclasses.fields(Config):
         lines += [f"### `{section.name}`", "",

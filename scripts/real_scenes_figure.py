@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 
 from vsmatch import datasets, pipeline, preview, rig
-from vsmatch.confidence import DEFAULT_MIN_CONFIDENCE, out_of_view
+from vsmatch.confidence import DEFAULT_MIN_CONFIDENCE, keep_confident
 from vsmatch.peers import sgbm_matcher
 
 #: Width of each tile in the picture.
@@ -59,8 +59,8 @@ def main() -> int:
         result = pipeline.run(left, right, max_disp=max_disp)
         low, high = result.search_range
         # Pixels whose match would lie outside the right view black, as SGBM leaves them.
-        shown = np.where(out_of_view(result.disparity), np.inf, result.disparity)
-        ours = preview.disparity_preview(shown.astype(np.float32), None, 0.0)
+        shown = keep_confident(result.disparity, result.confidence, 0.0)
+        ours = preview.disparity_preview(shown, None, 0.0)
         width = left.shape[1]
         # SGBM on the same range and the same colours (its holes black).
         raw = sgbm_matcher(high, 3, min_disp=low).compute(left, right).astype(np.float32)

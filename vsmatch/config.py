@@ -35,18 +35,15 @@ class CostConfig:
 
     census_width: int = _param(9, 1, 15, doc="Census window width (odd), pixels.")
     census_height: int = _param(7, 1, 15, doc="Census window height (odd), pixels.")
-    # A neighbour sets its census bit only when darker than the centre by more than this.
     census_band: float = _param(0.0, 0.0, 64.0, doc=(
         "A neighbour sets its census bit only when darker than the centre by more than this "
         "(grey levels)."))
     lambda_census: float = _param(30.0, 0.01, 1000.0, doc=(
         "Scale of the census term, 1 − exp(−c / λ): smaller saturates sooner."))
-    # None switches a term off.
     lambda_gradient: float | None = _param(None, 0.01, 10000.0, nullable=True, doc=(
         "Scale of the gradient (visual sensitivity) term; null switches it off."))
     lambda_ad: float | None = _param(None, 0.01, 1000.0, nullable=True, doc=(
         "Scale of the colour (absolute difference) term; null switches it off."))
-    # Weight of the colour term (set by the photometric stage when its residual is large).
     ad_weight: float = _param(1.0, 0.0, 1.0, doc=(
         "Weight of the colour term (the photometric stage lowers it where colours disagree)."))
     # The colour term compares colours less their mean over a box this many pixels wide
@@ -55,7 +52,6 @@ class CostConfig:
     ad_mean_box: int = _param(0, 0, 255, doc=(
         "Compare colours less their mean over a box this wide (odd); 0 compares them as they "
         "are."))
-    # Gaussian sigma applied to both views before every stage; 0 = off.
     presmooth_sigma: float = _param(0.0, 0.0, 5.0, doc=(
         "Gaussian blur of both views before every stage; 0 is off."))
 
@@ -89,7 +85,6 @@ class NoiseConfig:
     #: noise of three costs, the equiangular fit follows the smallest.
     subpixel_fit: str = _param("same", choices=("same", "parabola", "equiangular", "blend"),
                                doc="Sub-pixel fit on noisy views; same keeps subpixel.fit.")
-    #: Whether the slanted planes stay on for noisy views.
     planes: bool = _param(True, doc="Keep the slanted planes on noisy views.")
 
 
@@ -140,7 +135,6 @@ class ScanlineConfig:
         "Divide P1, P2 by this where the colour changes in one view."))
     reduce_both: float = _param(10.0, 1.0, 100.0, doc=(
         "Divide P1, P2 by this where it changes in both."))
-    # 4: along rows and columns; 8: the diagonals too (as SGM's usual eight paths).
     directions: int = _param(4, choices=(4, 8), doc=(
         "4: rows and columns; 8: the diagonals too."))
 
@@ -195,7 +189,6 @@ class SubpixelConfig:
 
     enabled: bool = _param(False, doc="Sub-pixel fit on the aggregated costs.")
     median: bool = _param(False, doc="3×3 median after the fit.")
-    # "parabola", or "equiangular" (a symmetric V: census-like costs, less pixel-locking).
     fit: str = _param("parabola", choices=("parabola", "equiangular", "blend"), doc=(
         "parabola; equiangular (a symmetric V: census-like costs, less locking to whole "
         "pixels); blend (their mean)."))
@@ -229,7 +222,6 @@ class PlanesConfig:
     jump: float = _param(0.0, 0.0, 100.0, doc=(
         "Arms end before a step larger than this between consistent neighbours (0: colour "
         "alone)."))
-    # Whether rejected pixels take their plane (else they keep the fill's value).
     fill: bool = _param(True, doc="Rejected pixels take their plane (else the fill's value).")
 
 
@@ -288,7 +280,6 @@ class MemoryConfig:
     max_mb: int = _param(1024, 16, 1 << 20, doc=(
         "Working-memory budget of the full search, MB (--max-memory); stripes above it."))
     overlap: int = _param(48, 0, 4096, doc="Extra rows above and below each stripe.")
-    # Views larger than this are refused from their header, before decoding.
     max_megapixels: float = _param(200.0, 0.01, 10000.0, doc=(
         "Views larger than this are refused from their header."))
 
