@@ -51,7 +51,7 @@ def main() -> None:
                 cv2.imwrite(str(tmp / file), view)
             write_opencv(tmp / "stereo.yaml", m)
             (tmp / "calib.txt").write_text(rig.middlebury_calib_text(
-                calib, m["size"], found.max_disp + 1))
+                calib, m["size"], (0, found.max_disp)))
             for args_ in (["im0.png", "im1.png", "--calib", "calib.txt", "--cloud", "o.ply"],
                           ["raw_l.png", "raw_r.png", "--calib", "stereo.yaml", "--cloud",
                            "r.ply"]):

@@ -146,3 +146,76 @@ def test_an_output_over_an_input_fails_that_pair(tmp_path, rng):
     result = invoke("batch", csv, "--overwrite")
     assert result.exit_code == 1 and "would overwrite the input" in result.output
     assert (tmp_path / "l.png").read_bytes() == before
+
+
+def test_confidence_files_are_part_of_the_plan(tmp_path, rng):
+    """A row's confidence file (NAME_confidence.pfm) is an output like its disparity:
+    another row may not write it, and a user's own file of that name is not replaced
+    without --overwrite."""
+    write_pair(tmp_path, rng, "l.png", "r.png")
+    clash = tmp_path / "clash.csv"
+    clash.write_text("l.png,r.png,a_confidence.pfm,8\nl.png,r.png,a.pfm,8\n")
+    result = invoke("batch", clash, "--confidence")
+    assert result.exit_code == 1 and "both write" in result.output, result.output
+    assert not (tmp_path / "a.pfm").exists() and not (tmp_path / "a_confidence.pfm").exists()
+
+    own = tmp_path / "own.csv"
+    own.write_text("l.png,r.png,b.pfm,8\n")
+    (tmp_path / "b_confidence.pfm").write_bytes(b"mine")
+    result = invoke("batch", own, "--confidence")
+    assert result.exit_code == 1 and "--overwrite" in result.output, result.output
+    assert (tmp_path / "b_confidence.pfm").read_bytes() == b"mine"
+    assert not (tmp_path / "b.pfm").exists()
+    assert invoke("batch", own, "--confidence", "--overwrite").exit_code == 0
+    assert io.read_pfm(tmp_path / "b_confidence.pfm").shape == (32, 48)
+
+
+def test_folder_batch_sub_folders_that_clash_with_a_confidence_file(tmp_path, rng):
+    write_pair(tmp_path / "scenes" / "a", rng, "im0.png", "im1.png")
+    write_pair(tmp_path / "scenes" / "a_confidence", rng, "im0.png", "im1.png")
+    result = invoke("batch", tmp_path / "scenes", "-o", tmp_path / "out", "--max-disp", 8,
+                    "--confidence")
+    assert result.exit_code == 1 and "both write" in result.output, result.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_pair_list_is_never_an_output(tmp_path, rng):
+    write_pair(tmp_path, rng, "l.png", "r.png")
+    csv = tmp_path / "pairs.csv"
+    csv.write_text("l.png,r.png,pairs.csv,8\n")
+    before = csv.read_bytes()
+    result = invoke("batch", csv)
+    assert result.exit_code == 1 and "would overwrite the pair list" in result.output
+    assert csv.read_bytes() == before
+
+
+def test_csv_outputs_are_checked_before_any_pair_runs(tmp_path, rng, monkeypatch):
+    """A missing output folder is made; a read-only one, or an output that is not .pfm or
+    .png, is refused before any pair is matched (so no pair is matched in vain)."""
+    write_pair(tmp_path, rng, "l.png", "r.png")
+    csv = tmp_path / "pairs.csv"
+    csv.write_text("l.png,r.png,first.pfm,8\nl.png,r.png,new/deeper/d.pfm,8\n")
+    result = invoke("batch", csv)
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "new/deeper/d.pfm").exists()
+
+    csv.write_text("l.png,r.png,second.pfm,8\nl.png,r.png,d.jpg,8\n")
+    result = invoke("batch", csv)
+    assert result.exit_code == 1 and "line 2" in result.output and ".pfm" in result.output
+    assert not (tmp_path / "second.pfm").exists()
+
+    # As root every folder is writable, so the permission answer is simulated.
+    (tmp_path / "locked").mkdir()
+    monkeypatch.setattr("vsmatch.batch.writable", lambda folder: folder.name != "locked")
+    csv.write_text("l.png,r.png,second.pfm,8\nl.png,r.png,locked/d.pfm,8\n")
+    result = invoke("batch", csv)
+    assert result.exit_code == 1 and "not writable" in result.output, result.output
+    assert not (tmp_path / "second.pfm").exists()
+
+
+def test_jobs_beside_a_scheduler_is_refused(tmp_path, rng):
+    write_pair(tmp_path, rng, "l.png", "r.png")
+    csv = tmp_path / "pairs.csv"
+    csv.write_text("l.png,r.png,a.pfm,8\n")
+    result = invoke("batch", csv, "--jobs", 2, "--scheduler", "local:1")
+    assert result.exit_code == 2 and "--jobs" in result.output

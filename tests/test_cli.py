@@ -159,7 +159,7 @@ def test_demo_writes_its_outputs(tmp_path):
     assert "% bad pixels" in result.output
     names = {p.name for p in (tmp_path / "demo").iterdir()}
     assert names == {"left.png", "right.png", "disparity.pfm", "disparity_colour.png",
-                     "error.png"}
+                     "error.png", "vsmatch-demo.txt"}
 
 
 def test_eval_missing_dataset_says_where_it_looked(tmp_path):

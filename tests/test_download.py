@@ -180,3 +180,18 @@ def test_datasets_list_names_one_data_root(tmp_path):
     result = CliRunner().invoke(main, ["datasets", "list", "--data-root", str(tmp_path)])
     roots = [line for line in result.output.splitlines() if line.startswith("data root")]
     assert roots == [f"data root: {tmp_path.resolve()} (--data-root or VSMATCH_DATA change it)"]
+
+
+def test_a_failed_download_leaves_no_empty_folder(tmp_path):
+    """The folder --to made and its empty .downloads/ cache go when nothing arrived."""
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    to = tmp_path / "new" / "data"
+    result = CliRunner().invoke(main, ["-q", "datasets", "download", "middlebury2014",
+                                       "--to", str(to), "--mirror",
+                                       f"http://127.0.0.1:{port}"])
+    assert result.exit_code == 1 and "download failed" in result.output
+    assert list(tmp_path.iterdir()) == []

@@ -4,7 +4,6 @@ import cv2
 import numpy as np
 
 import vsmatch
-from vsmatch import matcher as matcher_module
 from vsmatch import rig, search_range
 
 
@@ -32,11 +31,11 @@ def test_the_found_range_is_kept_until_the_scene_comes_closer(rng, monkeypatch):
     calls = []
     real = search_range.estimate_disparity_range
 
-    def counting(left, right, *args):
+    def counting(left, right, *args, **kwargs):
         calls.append(1)
-        return real(left, right, *args)
+        return real(left, right, *args, **kwargs)
 
-    monkeypatch.setattr(matcher_module, "estimate_disparity_range", counting)
+    monkeypatch.setattr(search_range, "estimate_disparity_range", counting)
     stereo = vsmatch.StereoMatcher()
     far = textured(rng, 6)
     for _ in range(3):

@@ -168,13 +168,16 @@ def test_unexpected_errors_are_one_line_and_debug_shows_them(pair_files, tmp_pat
     assert files_in(tmp_path) == ["l.png", "r.png"]
 
 
-def test_a_very_thin_pair_without_a_range_is_one_line(tmp_path, rng):
-    left, right = random_pair(rng, height=4, width=20000, shift=3)
+@pytest.mark.parametrize("height, width", [(4, 20000), (2, 100000), (60, 1)])
+def test_a_very_thin_pair_without_a_range_is_one_line(tmp_path, rng, height, width):
+    """What is wrong is the views' size, whatever the range: said before any range is
+    looked for (not "give --max-disp")."""
+    left, right = random_pair(rng, height=height, width=width, shift=0)
     cv2.imwrite(str(tmp_path / "l.png"), left)
     cv2.imwrite(str(tmp_path / "r.png"), right)
     line = one_line_error(invoke("run", tmp_path / "l.png", tmp_path / "r.png", "-o",
                                  tmp_path / "d.pfm"))
-    assert "could not estimate the disparity range" in line and "--max-disp" in line
+    assert "smaller than the census window" in line and "--max-disp" not in line
 
 
 @pytest.mark.parametrize("text,message", [

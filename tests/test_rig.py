@@ -172,7 +172,7 @@ def test_the_cloud_of_a_raw_rig_is_as_right_as_the_rectified_originals(data_dir,
     cv2.imwrite(str(tmp_path / "im1.png"), found.right)
     write_opencv(tmp_path / "stereo.yaml", m)
     (tmp_path / "calib.txt").write_text(rig.middlebury_calib_text(
-        calib, m["size"], found.max_disp + 1))
+        calib, m["size"], (0, found.max_disp)))
     original = invoke("run", tmp_path / "im0.png", tmp_path / "im1.png", "-o",
                       tmp_path / "o.pfm", "--calib", tmp_path / "calib.txt", "--cloud",
                       tmp_path / "o.ply")

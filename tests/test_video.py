@@ -81,3 +81,52 @@ def test_video_errors_are_one_line(tmp_path):
     result = invoke("video", tmp_path / "a.avi", tmp_path / "b.avi", "-o", tmp_path / "d.gif")
     assert result.exit_code == 2 and ".avi or .mp4" in result.output
     assert not (tmp_path / "d.avi").exists()
+
+
+def test_overwrite_never_deletes_what_vsmatch_did_not_write(tmp_path, rng, monkeypatch):
+    """--frames DIR --overwrite replaces a folder of earlier frames only: a user's own
+    file or sub-folder in it is refused, kept, and nothing is written; the current folder
+    is never a --frames folder."""
+    write_videos(tmp_path, rng)
+    frames = tmp_path / "frames"
+    (frames / "notes").mkdir(parents=True)
+    (frames / "000000.pfm").write_bytes(b"old frame")
+    (frames / "notes" / "mine.txt").write_text("mine")
+    result = invoke("video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
+                    tmp_path / "d.avi", "--frames", frames, "--overwrite", "--max-disp", 16)
+    assert result.exit_code == 1 and "notes" in result.output, result.output
+    assert (frames / "notes" / "mine.txt").read_text() == "mine"
+    assert not (tmp_path / "d.avi").exists()
+
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    result = invoke("video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
+                    tmp_path / "e.avi", "--frames", ".", "--overwrite", "--max-disp", 16)
+    assert result.exit_code == 1 and "current folder" in result.output, result.output
+    assert not (tmp_path / "e.avi").exists()
+    assert list(work.iterdir()) == [] and not list(tmp_path.glob(".*old*"))
+
+
+def test_a_full_frames_folder_is_named_by_its_own_path(tmp_path, rng):
+    """A write that fails inside the staged --frames folder names the folder the user
+    gave, never its temporary, in one line (no libpng line beside it)."""
+    import subprocess
+
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(disk)],
+                      capture_output=True).returncode != 0:
+        import pytest
+        pytest.skip("cannot mount a small tmpfs here")
+    try:
+        write_videos(tmp_path, rng)
+        result = invoke("video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
+                        tmp_path / "d.avi", "--frames", disk / "fr", "--max-disp", 16)
+        assert result.exit_code == 1, result.output
+        lines = [line for line in result.output.splitlines() if "Error" in line]
+        assert len(lines) == 1 and "could not be written" in lines[0], result.output
+        assert f"{disk / 'fr'}/0000" in lines[0] and ".tmp" not in lines[0], lines[0]
+        assert not list(disk.iterdir()) and not (tmp_path / "d.avi").exists()
+    finally:
+        subprocess.run(["umount", str(disk)], capture_output=True)

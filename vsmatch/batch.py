@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import functools
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -14,7 +15,7 @@ from .confidence import keep_confident
 from .config import Config
 from .executors import Executor
 from .executors.serial import SerialExecutor
-from .search_range import estimate_disparity_range
+from .search_range import resolve_range
 
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
 
@@ -56,11 +57,22 @@ class PairOutcome:
     seconds: float = 0.0
 
 
-def check_plan(jobs: list[PairJob]) -> None:
-    """Refuse, before any work, a plan in which an output names any row's input (also
-    through links) or two rows name one output; the message names both rows. Linear in
-    the rows: each path is looked up by its resolved name and by its file on disk."""
-    inputs: dict[object, tuple[PairJob, Path]] = {}
+def job_outputs(job: PairJob, with_confidence: bool) -> list[Path]:
+    """The files a job writes: its disparity, and its confidence when asked."""
+    return [job.output] + ([confidence_path(job.output)] if with_confidence else [])
+
+
+def check_plan(jobs: list[PairJob], *, with_confidence: bool = False,
+               sources: tuple[Path, ...] = ()) -> None:
+    """Refuse, before any work, a plan in which an output (a disparity, or a confidence
+    file when asked) names any row's input or a ``sources`` file (the pair list itself),
+    also through links, or two rows write one file; the message names both rows. Linear
+    in the rows: each path is looked up by its resolved name and by its file on disk."""
+    inputs: dict[object, tuple[PairJob | None, Path]] = {}
+    for path in sources:
+        for key in (Path(path).resolve(), _file_key(Path(path))):
+            if key is not None:
+                inputs.setdefault(key, (None, Path(path)))
     for job in jobs:
         for path in (job.left, job.right):
             for key in (path.resolve(), _file_key(path)):
@@ -68,17 +80,51 @@ def check_plan(jobs: list[PairJob]) -> None:
                     inputs.setdefault(key, (job, path))
     outputs: dict[object, PairJob] = {}
     for job in jobs:
-        keys = [k for k in (job.output.resolve(), _file_key(job.output)) if k is not None]
-        for key in keys:
-            if key in inputs:
-                other, path = inputs[key]
-                raise BatchError(f"{job.describe()}: the output {job.output} would overwrite "
-                                 f"the input {path} of {other.describe()}")
-            if key in outputs:
-                raise BatchError(f"{job.describe()} and {outputs[key].describe()} both "
-                                 f"write {job.output}")
-        for key in keys:
-            outputs[key] = job
+        for output in job_outputs(job, with_confidence):
+            keys = [k for k in (output.resolve(), _file_key(output)) if k is not None]
+            for key in keys:
+                if key in inputs:
+                    other, path = inputs[key]
+                    whose = (f"the pair list {path}" if other is None
+                             else f"the input {path} of {other.describe()}")
+                    raise BatchError(f"{job.describe()}: the output {output} would overwrite "
+                                     f"{whose}")
+                if key in outputs and outputs[key] is not job:
+                    raise BatchError(f"{job.describe()} and {outputs[key].describe()} both "
+                                     f"write {output}")
+            for key in keys:
+                outputs[key] = job
+
+
+def writable(folder: Path) -> bool:
+    return os.access(folder, os.W_OK)
+
+
+def check_output_files(jobs: list[PairJob]) -> list[Path]:
+    """Refuse, before any work, an output that is not a .pfm or .png file name, or whose
+    folder cannot be made or written; the message names the row. Returns the output
+    folders that do not exist yet (the caller makes them once the whole plan holds)."""
+    missing: dict[Path, None] = {}
+    for job in jobs:
+        output = job.output
+        if output.suffix.lower() not in io.DISPARITY_FORMATS:
+            raise BatchError(f"{job.describe()}: the output {output} must end in .pfm "
+                             "(float32) or .png (16-bit)")
+        if output.is_dir():
+            raise BatchError(f"{job.describe()}: the output {output} is a folder")
+        folder = output.parent
+        existing = folder
+        while not existing.exists() and existing != existing.parent:
+            existing = existing.parent
+        if not existing.is_dir():
+            raise BatchError(f"{job.describe()}: the output folder {folder} cannot be made "
+                             f"({existing} is a file)")
+        if not writable(existing):
+            raise BatchError(f"{job.describe()}: the output folder {existing} is not "
+                             "writable")
+        if existing != folder:
+            missing[folder] = None
+    return list(missing)
 
 
 def _file_key(path: Path) -> tuple | None:
@@ -203,11 +249,10 @@ def match_pair(job: PairJob, config: Config, *, with_confidence: bool = False,
         _check_png_range(job.output, 0, job.max_disp)
     left, right = io.read_pair(job.left, job.right, max_mb=config.memory.max_mb,
                                max_megapixels=config.memory.max_megapixels)
-    min_disp, max_disp = 0, job.max_disp
     try:
-        if max_disp is None:
-            found = estimate_disparity_range(left, right)
-            min_disp, max_disp = found.min_disp, found.max_disp
+        pipeline.check_views(left, right, config)
+        searched = resolve_range(left, right, max_disp=job.max_disp)
+        min_disp, max_disp = searched.min_disp, searched.max_disp
         _check_png_range(job.output, min_disp, max_disp)
         pipeline.check_pair(left, right, max_disp, config, min_disp)
     except ValueError as exc:

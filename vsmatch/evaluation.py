@@ -132,12 +132,12 @@ def scene_ranges(scenes: list[Scene], auto: bool = False) -> dict[str, tuple[int
     """Each scene's search range: the official one, or the one estimated from the pair."""
     if not auto:
         return {s.name: (s.min_disp, s.max_disp) for s in scenes}
-    from .search_range import estimate_disparity_range
+    from .search_range import resolve_range
 
     ranges = {}
     for scene in scenes:
-        found = estimate_disparity_range(scene.left, scene.right)
-        ranges[scene.name] = (found.min_disp, found.max_disp)
+        searched = resolve_range(scene.left, scene.right)
+        ranges[scene.name] = (searched.min_disp, searched.max_disp)
     return ranges
 
 

@@ -8,6 +8,7 @@ z forward), as OpenCV's ``reprojectImageTo3D`` gives.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,6 +36,9 @@ class Calibration:
     focal_y: float | None = None  # fy, when it differs from f
     ndisp: int | None = None  # Middlebury's search range 0 .. ndisp - 1, when given
     size: tuple[int, int] | None = None  # (width, height) of the views, when given
+    # The search's bottom (vsmatch's ``dmin`` in calib.txt: a verged rig's range starts
+    # below 0); the range is min_disp .. min_disp + ndisp - 1.
+    min_disp: int = 0
 
     def __post_init__(self):
         for name in ("focal", "baseline", "cx", "cy", "doffs", "focal_y"):
@@ -55,6 +59,17 @@ class Calibration:
         if self.ndisp is None or self.ndisp >= width / 2:
             return None
         return self.ndisp
+
+    def search_range(self, width: int) -> tuple[int, int] | None:
+        """``(min_disp, min_disp + ndisp - 1)``, or None where ndisp is not given or is a
+        placeholder (:meth:`search_range_for`)."""
+        ndisp = self.search_range_for(width)
+        return None if ndisp is None else (self.min_disp, self.min_disp + ndisp - 1)
+
+    def lowest_disparity(self) -> int:
+        """The smallest whole disparity a real point can have: a point at infinity has
+        ``d = -doffs``, and below it points would lie behind the cameras."""
+        return math.floor(-self.doffs)
 
     def depth_problem(self) -> str | None:
         """Why depths of this camera do not fit float32, or None: the nearest depth
@@ -136,18 +151,22 @@ def _middlebury(fields: dict[str, str]) -> Calibration:
     cam0 = _numbers(fields, "cam0")
     if cam0.size != 9:
         raise ValueError("cam0 must be a 3x3 matrix")
-    ndisp = None
-    if "ndisp" in fields:
-        ndisp = _number(fields, "ndisp")
-        if ndisp != int(ndisp):
-            raise ValueError("ndisp must be a whole number")
-        ndisp = int(ndisp)
+    ndisp = _integer(fields, "ndisp") if "ndisp" in fields else None
     doffs = _number(fields, "doffs") if "doffs" in fields else 0.0
+    min_disp = _integer(fields, "dmin") if "dmin" in fields else 0
     size = None
     if "width" in fields and "height" in fields:
         size = (_whole(fields, "width"), _whole(fields, "height"))
     return Calibration(focal=cam0[0], baseline=_number(fields, "baseline"), cx=cam0[2],
-                       cy=cam0[5], doffs=doffs, focal_y=cam0[4], ndisp=ndisp, size=size)
+                       cy=cam0[5], doffs=doffs, focal_y=cam0[4], ndisp=ndisp, size=size,
+                       min_disp=min_disp)
+
+
+def _integer(fields: dict[str, str], key: str) -> int:
+    value = _number(fields, key)
+    if value != int(value):
+        raise ValueError(f"{key} must be a whole number")
+    return int(value)
 
 
 def _whole(fields: dict[str, str], key: str) -> int:

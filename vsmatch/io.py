@@ -15,6 +15,7 @@ import signal
 import sys
 import tempfile
 import threading
+from collections.abc import Callable
 from pathlib import Path
 
 import cv2
@@ -148,20 +149,24 @@ def write_atomic(path: str | Path, encode) -> None:
     """
     path = Path(path)
     folder = check_output_file(path)
+    shown = final_path(path)
     try:
         fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path),
                                    suffix=_temporary_suffix(path), dir=folder)
     except OSError as exc:
-        raise OSError(f"{path}: could not be written ({exc.strerror or exc})") from None
+        raise OSError(f"{shown}: could not be written ({exc.strerror or exc})") from None
     os.close(fd)
     try:
         try:
-            encode(tmp)
+            with native_stderr_silenced():  # libpng's own "Write Error" line
+                encode(tmp)
         except OSError as exc:
-            if str(path) in str(exc):
+            if str(shown) in str(exc):
                 raise
             reason = exc.strerror or str(exc) or type(exc).__name__
-            raise OSError(f"{path}: could not be written ({reason})") from None
+            if str(path) in reason or tmp in reason:
+                reason = exc.strerror or "write error"
+            raise OSError(f"{shown}: could not be written ({reason})") from None
         # mkstemp makes the file private (0600); give it the mode any new file gets.
         os.chmod(tmp, 0o666 & ~current_umask())
         _land(tmp, path)
@@ -169,6 +174,20 @@ def write_atomic(path: str | Path, encode) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+#: Staged folders being written: their temporary path -> the path they will land at.
+_STAGED_FOLDERS: dict[Path, Path] = {}
+
+
+def final_path(path: str | Path) -> Path:
+    """``path`` as the user will see it: inside a staged folder, under the folder's final
+    name rather than its temporary one (for messages)."""
+    path = Path(path)
+    for tmp, final in _STAGED_FOLDERS.items():
+        if path.is_relative_to(tmp):
+            return final / path.relative_to(tmp)
+    return path
 
 
 def check_output_file(path: str | Path) -> Path:
@@ -193,29 +212,81 @@ def _land(tmp: str | Path, path: Path) -> None:
         staged.append((str(tmp), path))
 
 
-@contextlib.contextmanager
-def staged_folder(path: str | Path, *, overwrite: bool = False):
-    """A new folder that replaces ``path`` as a whole when the block (and the enclosing
-    :func:`all_or_none` block) ends without an error, or is removed otherwise. An
-    existing ``path`` that holds anything is refused unless ``overwrite``."""
+def check_replaceable_folder(path: str | Path, *, overwrite: bool,
+                             ours: Callable[[Path], bool]) -> None:
+    """Refuse to replace the folder ``path`` as a whole when it is a file, the current
+    folder or one above it, or holds anything: with ``overwrite``, anything that
+    ``ours`` does not recognise as an earlier run's output (a user's own file or
+    sub-folder is never deleted)."""
     path = Path(path)
-    parent = path.parent if str(path.parent) else Path(".")
     if path.exists() and not path.is_dir():
         raise OSError(f"{path}: is a file, not a folder")
-    if path.is_dir() and any(path.iterdir()) and not overwrite:
-        raise OSError(f"{path}: the folder is not empty (--overwrite replaces it as a "
-                      "whole)")
+    if not path.is_dir():
+        return
+    if Path.cwd().resolve().is_relative_to(path.resolve()):
+        raise OSError(f"{path}: is the current folder or holds it; name a folder of "
+                      "its own")
+    entries = sorted(path.iterdir())
+    if entries and not overwrite:
+        raise OSError(f"{path}: the folder is not empty (--overwrite replaces an earlier "
+                      "run's folder as a whole)")
+    foreign = [entry for entry in entries if not ours(entry)]
+    if foreign:
+        raise OSError(f"{path}: holds {foreign[0].name}, which is not an output of this "
+                      "command; --overwrite replaces only a folder of earlier outputs "
+                      "(name a new folder)")
+
+
+@contextlib.contextmanager
+def staged_folder(path: str | Path, *, overwrite: bool = False,
+                  ours: Callable[[Path], bool] = lambda entry: False):
+    """A new folder that replaces ``path`` as a whole when the block (and the enclosing
+    :func:`all_or_none` block) ends without an error, or is removed otherwise. An
+    existing ``path`` that holds anything is refused unless ``overwrite`` and each of
+    its entries is an earlier output (``ours``; see :func:`check_replaceable_folder`)."""
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    check_replaceable_folder(path, overwrite=overwrite, ours=ours)
     parent.mkdir(parents=True, exist_ok=True)
     try:
         tmp = tempfile.mkdtemp(prefix=_temporary_prefix(path), suffix=".tmp", dir=parent)
     except OSError as exc:
         raise OSError(f"{path}: could not be written ({exc.strerror or exc})") from None
+    _STAGED_FOLDERS[Path(tmp)] = path
     try:
         yield Path(tmp)
         os.chmod(tmp, 0o777 & ~current_umask())
         _land(tmp, path)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    finally:
+        _STAGED_FOLDERS.pop(Path(tmp), None)
+
+
+@contextlib.contextmanager
+def output_folder(path: str | Path | None):
+    """``path`` made (with its parents) if missing; the folders made here are removed
+    again when the block fails and they are still empty, so a failed command leaves no
+    empty output folder behind. ``None``: nothing to make."""
+    if path is None:
+        yield None
+        return
+    path = Path(path)
+    made = []
+    for folder in [path, *path.parents]:
+        if folder.exists():
+            break
+        made.append(folder)
+    path.mkdir(parents=True, exist_ok=True)
+    try:
+        yield path
+    except BaseException:
+        for folder in made:  # deepest first
+            try:
+                folder.rmdir()
+            except OSError:  # not empty (or already gone): left as it is
+                break
         raise
 
 
@@ -354,7 +425,7 @@ def imwrite_atomic(path: str | Path, image: np.ndarray) -> None:
     """``cv2.imwrite`` through a temporary file; raises OSError when OpenCV cannot write."""
     def encode(tmp: str) -> None:
         if not cv2.imwrite(tmp, image):
-            raise OSError(f"{path}: could not be written")
+            raise OSError("the encoder failed; is the disk full?")
     write_atomic(path, encode)
 
 
@@ -368,8 +439,8 @@ def png_range_problem(path: str | Path, min_disp: int, max_disp: int) -> str | N
     disparity would be clipped or lost, so such an output is refused before the work."""
     if Path(path).suffix.lower() != ".png":
         return None
-    # Sub-pixel refinement may move a winner half a pixel past the searched range.
-    if min_disp < 0 or max_disp + 0.5 > PNG16_MAX_DISPARITY:
+    # The disparities stay within the searched range (pipeline.run).
+    if min_disp < 0 or max_disp > PNG16_MAX_DISPARITY:
         return (f"{path}: a 16-bit PNG holds disparities 0..{PNG16_MAX_DISPARITY:.3f}, "
                 f"but the search range is {min_disp}..{max_disp}; write .pfm instead")
     return None

@@ -16,7 +16,7 @@ import numpy as np
 from . import pipeline, rig, volumes
 from .config import Config, load_config
 from .geometry import Calibration, CalibrationError, read_calibration
-from .search_range import estimate_disparity_range
+from .search_range import resolve_range
 
 #: The range is found again when more than this share of a frame's confident pixels
 #: lies within TOP_MARGIN of its top: something came closer than the range allows.
@@ -38,13 +38,26 @@ class StereoMatcher:
     def __init__(self, max_disp: int | None = None, min_disp: int | None = None,
                  config: Config | str | None = None, calib=None, alpha: float = 0.0):
         self.config = load_config(config)
+        for name, value in (("max_disp", max_disp), ("min_disp", min_disp)):
+            if value is not None and (isinstance(value, bool)
+                                      or not isinstance(value, (int, np.integer))):
+                raise ValueError(f"{name} must be a whole number or None, got {value!r}")
+        if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not (
+                0 <= alpha <= 1):
+            raise ValueError(f"alpha must be a number from 0 to 1, got {alpha!r}")
         self.fixed_range = max_disp is not None
+        self.min_disp = min_disp
         self.range = None if max_disp is None else (min_disp or 0, max_disp)
         self.camera: Calibration | None = None
         self._raw_rig = None
         self._rectifier = None
         self._alpha = alpha
         paths = [calib] if isinstance(calib, (str, Path)) else calib
+        if calib is not None and not isinstance(calib, Calibration) and not (
+                isinstance(paths, (list, tuple)) and paths
+                and all(isinstance(p, (str, Path)) for p in paths)):
+            raise ValueError("calib must be a Calibration, a calibration file's path or a "
+                             f"list of one or two paths, got {calib!r}"[:200])
         if isinstance(calib, Calibration):
             self.camera = calib
         elif paths:
@@ -85,12 +98,11 @@ class StereoMatcher:
         return self.result(left, right).disparity
 
     def _find_range(self, left, right) -> tuple[int, int]:
-        """The calibration's ndisp when it gives a real one, else the pair's range."""
-        ndisp = None if self.camera is None else self.camera.search_range_for(left.shape[1])
-        if ndisp is not None:
-            return 0, ndisp - 1
-        found = estimate_disparity_range(left, right)
-        return found.min_disp, max(found.max_disp, found.min_disp + 1)
+        """The calibration's range when it gives a real one, else the pair's, from
+        ``min_disp`` when given (:func:`vsmatch.search_range.resolve_range`)."""
+        searched = resolve_range(left, right, min_disp=self.min_disp, camera=self.camera,
+                                 rectified_here=self._raw_rig is not None)
+        return searched.min_disp, searched.max_disp
 
     @staticmethod
     def _top_is_crowded(result: pipeline.MatchResult, high: int) -> bool:

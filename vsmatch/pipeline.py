@@ -38,9 +38,8 @@ class MatchResult:
     curve: dict[str, np.ndarray] | None = None
 
 
-def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
-               min_disp: int = 0) -> None:
-    """Refuse inputs the method cannot run on, with a message naming the problem."""
+def check_views(left: np.ndarray, right: np.ndarray, cfg: Config) -> None:
+    """Refuse views the method cannot run on whatever the range (type, shape, size)."""
     for name, image in (("left", left), ("right", right)):
         if not isinstance(image, np.ndarray) or image.ndim not in (2, 3) or (
                 image.ndim == 3 and image.shape[2] != 3):
@@ -60,6 +59,13 @@ def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
     if width < cfg.cost.census_width or height < cfg.cost.census_height:
         raise ValueError(f"images of {width}x{height} are smaller than the census window "
                          f"{cfg.cost.census_width}x{cfg.cost.census_height}")
+
+
+def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
+               min_disp: int = 0) -> None:
+    """Refuse inputs the method cannot run on, with a message naming the problem."""
+    check_views(left, right, cfg)
+    width = left.shape[1]
     for name, value in (("max_disp", max_disp), ("min_disp", min_disp)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
             raise ValueError(f"{name} must be an integer, got {value!r}")
@@ -123,12 +129,11 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int | None = None,
     """:func:`match` with per-stage timings, the left-right labels and the range used."""
     cfg = load_config(config)
     if max_disp is None:
-        from .search_range import estimate_disparity_range
+        from .search_range import resolve_range
 
-        check_pair(left, right, 1, cfg)  # the views' own checks, before the features
-        found = estimate_disparity_range(left, right)
-        min_disp = found.min_disp if min_disp is None else min_disp
-        max_disp = max(found.max_disp, min_disp + 1)
+        check_views(left, right, cfg)  # the views' own checks, before the features
+        searched = resolve_range(left, right, min_disp=min_disp)
+        min_disp, max_disp = searched.min_disp, searched.max_disp
     min_disp = 0 if min_disp is None else min_disp
     check_pair(left, right, max_disp, cfg, min_disp)
     if min_disp == 0:
@@ -210,6 +215,10 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
             result.disparity = planes.fit_planes(result.disparity, result.labels, left,
                                                  adapted.arms, adapted.planes)
     result.photometric = correction
+    # A disparity outside the searched range is no estimate: a sub-pixel fit at the
+    # range's end or a plane's fill stops at the end (the confidence marks such pixels).
+    finite = np.isfinite(result.disparity)
+    result.disparity[finite] = np.clip(result.disparity[finite], 0, max_disp)
     with _stage(result.seconds, "confidence"):
         result.confidence = confidence.confidence_map(result.disparity, result.labels, left,
                                                       result.curve, max_disp + 1)

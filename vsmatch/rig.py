@@ -474,15 +474,19 @@ class Rectifier:
                            focal_y=float(p1[1, 1]))
 
 
-def middlebury_calib_text(calib: Calibration, size: tuple[int, int], ndisp: int | None
-                          ) -> str:
-    """A Middlebury-style ``calib.txt`` that ``vsmatch run --calib`` reads."""
+def middlebury_calib_text(calib: Calibration, size: tuple[int, int],
+                          search: tuple[int, int] | None) -> str:
+    """A Middlebury-style ``calib.txt`` that ``vsmatch run --calib`` reads; with the
+    range ``search`` = (min, max) searched: ``ndisp`` and, for a range that does not
+    start at 0 (a verged rig's), vsmatch's own ``dmin``."""
     cx, cy = calib.principal_point((size[1], size[0]))
     fy = calib.focal_y or calib.focal
     lines = [f"cam0=[{calib.focal:.6f} 0 {cx:.6f}; 0 {fy:.6f} {cy:.6f}; 0 0 1]",
              f"cam1=[{calib.focal:.6f} 0 {cx + calib.doffs:.6f}; 0 {fy:.6f} {cy:.6f}; 0 0 1]",
              f"doffs={calib.doffs:.6f}", f"baseline={calib.baseline:.6f}",
              f"width={size[0]}", f"height={size[1]}"]
-    if ndisp is not None:
-        lines.append(f"ndisp={ndisp}")
+    if search is not None:
+        lines.append(f"ndisp={search[1] - search[0] + 1}")
+        if search[0] != 0:
+            lines.append(f"dmin={search[0]}")
     return "\n".join(lines) + "\n"

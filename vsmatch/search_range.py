@@ -114,10 +114,56 @@ class FeatureMatches:
         return _agreeing(self.x[same_row], self.y[same_row], self.dx[same_row], self.factor)
 
 
+@dataclass(frozen=True)
+class SearchRange:
+    """The range a pair is searched over, and where it came from: ``given`` (by hand),
+    ``calibration`` (its ndisp) or ``found`` (from the pair, ``found`` then holds how)."""
+
+    min_disp: int
+    max_disp: int
+    source: str
+    found: DisparityRange | None = None
+
+
+def resolve_range(left: np.ndarray, right: np.ndarray, *, min_disp: int | None = None,
+                  max_disp: int | None = None, camera=None,
+                  rectified_here: bool = False) -> SearchRange:
+    """The one range policy of every entry point (``run``, ``match``, ``StereoMatcher``,
+    ``batch``, ``eval``): a given ``max_disp`` searches ``min_disp`` (default 0) ..
+    ``max_disp``; else the calibration's ``ndisp`` (from ``min_disp`` when given, else
+    from its own bottom) when it gives a real one; else the range found from the pair,
+    from ``min_disp`` when given, and never below what the calibration allows (a
+    disparity below ``-doffs`` lies beyond infinity). ``rectified_here``: the views were
+    rectified by vsmatch from a raw rig's calibration (a problem is said of that).
+    Raises :class:`RangeError` (or :class:`PairGeometryError`)."""
+    if max_disp is not None:
+        return SearchRange(0 if min_disp is None else min_disp, max_disp, "given")
+    calibrated = None if camera is None else camera.search_range(left.shape[1])
+    if calibrated is not None:
+        low = calibrated[0] if min_disp is None else min_disp
+        return SearchRange(low, low + calibrated[1] - calibrated[0], "calibration")
+    try:
+        found = estimate_disparity_range(
+            left, right, lowest=None if camera is None else camera.lowest_disparity())
+    except RangeError as exc:
+        if rectified_here:
+            raise type(exc)(said_of_rig(str(exc))) from None
+        raise
+    low = found.min_disp if min_disp is None else min_disp
+    return SearchRange(low, max(found.max_disp, low + 1), "found", found)
+
+
+def said_of_rig(problem: str) -> str:
+    """A pair problem as said of views that vsmatch rectified itself (a raw rig's)."""
+    return problem.replace(NOT_RECTIFIED, STILL_NOT_RECTIFIED)
+
+
 def estimate_disparity_range(left: np.ndarray, right: np.ndarray,
-                             matches: FeatureMatches | None = None) -> DisparityRange:
+                             matches: FeatureMatches | None = None,
+                             lowest: int | None = None) -> DisparityRange:
     """The search range for a rectified pair (BGR or grey uint8 views): ``0 .. max``, or
-    from a negative bottom when the matches show negative disparities. Raises
+    from a negative bottom when the matches show negative disparities, but never below
+    ``lowest`` (a calibration's: the disparity of a point at infinity). Raises
     :class:`PairGeometryError` for swapped or unrectified views."""
     width = left.shape[1]
     matches = feature_matches(left, right) if matches is None else matches
@@ -140,6 +186,8 @@ def estimate_disparity_range(left: np.ndarray, right: np.ndarray,
         # the sparse bottom) bounds how far it may widen the range.
         low = min(low, dense_low)
     min_disp = 0 if low >= 0 else math.floor(MARGIN_FACTOR * low - MARGIN_PIXELS)
+    if lowest is not None:
+        min_disp = max(min_disp, min(lowest, 0))
     # The views are cropped by |min_disp| columns for an offset range (pipeline.run).
     max_disp = int(min(max_disp, width - 2 - abs(min_disp) + min_disp))
     return DisparityRange(min_disp, max_disp, sparse, dense, int(disparities.size))

@@ -11,7 +11,7 @@ from .. import batch
 from ..config import load_config
 from ..executors import make_executor
 from .common import (CONFIDENCE_LEVEL, MAX_DISP, announce_compilation, config_option, echo,
-                     examples, friendly_errors, max_memory_option, scheduler_address,
+                     examples, friendly_errors, given, max_memory_option, scheduler_address,
                      verbosity_options, with_budget)
 
 from .main import main
@@ -68,6 +68,9 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
     """
     from tqdm import tqdm
 
+    if scheduler is not None and given(ctx, "jobs"):
+        raise click.UsageError("--jobs is for this machine's processes; a --scheduler "
+                               "cluster runs as many pairs at once as it has workers")
     cfg = with_budget(load_config(config), max_memory)
     src = Path(source)
     unpaired = []
@@ -80,10 +83,22 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
         raise click.ClickException(f"{src}: no such file or folder")
     if not jobs_list and not unpaired:
         raise click.ClickException(f"{src}: no stereo pairs found")
-    batch.check_plan(jobs_list)  # before any work: no output over an input or another output
-    if jobs_list and src.is_dir():
-        Path(out_dir).mkdir(parents=True, exist_ok=True)
+    # Before any work: no output over an input, the pair list or another output, every
+    # output a .pfm or .png in a folder that can be written, and no file that an earlier
+    # run did not write replaced without --overwrite.
+    batch.check_plan(jobs_list, with_confidence=with_confidence,
+                     sources=() if src.is_dir() else (src,))
+    missing_folders = batch.check_output_files(jobs_list)
     todo = [j for j in jobs_list if overwrite or not j.output.exists()]
+    if not overwrite:
+        for job in todo:
+            for path in batch.job_outputs(job, with_confidence)[1:]:
+                if path.exists():
+                    raise click.ClickException(
+                        f"{job.describe()}: {path} exists but {job.output} does not: it is "
+                        "not this batch's output (--overwrite replaces it)")
+    for folder in missing_folders:
+        folder.mkdir(parents=True, exist_ok=True)
     skipped = len(jobs_list) - len(todo)
     quiet = ctx.find_root().obj.get("quiet")
     failures = []

@@ -167,6 +167,12 @@ CONFIDENCE_LEVEL = FiniteRange(0, 1, "C")
 ALPHA = FiniteRange(0, 1, "ALPHA")
 
 
+def given(ctx: click.Context, name: str) -> bool:
+    """Whether the option ``name`` was given on the command line (not its default)."""
+    source = ctx.get_parameter_source(name)
+    return source is not None and source != click.core.ParameterSource.DEFAULT
+
+
 def one_line(exc: BaseException) -> str:
     text = str(exc).strip() or type(exc).__name__
     return " ".join(text.split())

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
 from .. import io, rig
@@ -41,5 +43,6 @@ def rectify(ctx, left, right, calib, folder, alpha):
     camera = rectifier.calibration()
     verbose(ctx, f"rectified: f {camera.focal:.1f} px, baseline {camera.baseline:g}, "
                  f"principal point ({camera.cx:.1f}, {camera.cy:.1f})")
-    write_rectified(folder, left_image, right_image, camera, None)
-    echo(ctx, f"wrote {folder}/im0.png, im1.png, calib.txt")
+    with io.output_folder(folder):
+        write_rectified(folder, left_image, right_image, camera, None)
+    echo(ctx, f"wrote {Path(folder) / 'im0.png'}, im1.png, calib.txt")

@@ -123,28 +123,34 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
     elif camera is not None and calib:
         _check_calibration_size(camera, calib[0], left_image.shape)
     width = left_image.shape[1]
-    if max_disp is None and camera is not None:
-        ndisp = camera.search_range_for(width)
-        if ndisp is not None:
-            max_disp = (min_disp or 0) + ndisp - 1
-        elif camera.ndisp is not None:
-            verbose(ctx, f"{calib[0]}: ndisp={camera.ndisp} is half the image width or more, "
-                          "taken as 'unknown': finding the range from the pair")
+    try:
+        pipeline.check_views(left_image, right_image, cfg)
+    except ValueError as exc:
+        raise click.ClickException(f"{left}: {exc}") from None
     if max_disp is not None and max_disp >= width:
         raise click.BadParameter(f"{max_disp} must be less than the image width ({width})",
                                  param_hint="'--max-disp'")
-    if max_disp is None:
-        found = _estimate_range(left_image, right_image, left, raw_rig is not None)
-        verbose(ctx, f"{left}: {found.describe()}")
-        min_disp = found.min_disp if min_disp is None else min_disp
-        max_disp = max(found.max_disp, min_disp + 1)
+    if max_disp is None and camera is not None and camera.ndisp is not None and (
+            camera.search_range(width) is None):
+        verbose(ctx, f"{calib[0]}: ndisp={camera.ndisp} is half the image width or more, "
+                      "taken as 'unknown': finding the range from the pair")
+    try:
+        searched = search_range.resolve_range(left_image, right_image, min_disp=min_disp,
+                                              max_disp=max_disp, camera=camera,
+                                              rectified_here=raw_rig is not None)
+    except ValueError as exc:
+        raise click.ClickException(f"{left}: {exc}") from None
+    if searched.found is not None:
+        verbose(ctx, f"{left}: {searched.found.describe()}")
     else:
         # Given a range, a pair the method cannot see is wrong is still named.
         problem = search_range.pair_problem(search_range.feature_matches(
             left_image, right_image, max_width=search_range.CHECK_WIDTH))
         if problem is not None:
-            echo(ctx, f"warning: {left}: {_for_rig(problem, raw_rig is not None)}", err=True)
-    min_disp = min_disp or 0
+            if raw_rig is not None:
+                problem = search_range.said_of_rig(problem)
+            echo(ctx, f"warning: {left}: {problem}", err=True)
+    min_disp, max_disp = searched.min_disp, searched.max_disp
     check_png_range(out, min_disp, max_disp)
     try:
         pipeline.check_pair(left_image, right_image, max_disp, cfg, min_disp)
@@ -164,10 +170,12 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
     metric_disp = confidence.keep_confident(
         result.disparity, result.confidence,
         DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence)
-    with io.all_or_none():  # every output of the run, or none of them
+    # Every output of the run, or none of them (nor the --rectified folder).
+    with io.output_folder(rectified_dir), io.all_or_none():
         io.write_disparity(out, disp)
         if rectified_dir is not None:
-            write_rectified(rectified_dir, left_image, right_image, camera, max_disp)
+            write_rectified(rectified_dir, left_image, right_image, camera,
+                            (min_disp, max_disp))
         if depth_path is not None:
             io.write_depth(depth_path, geometry.depth_from_disparity(metric_disp, camera))
         if cloud_path is not None:
@@ -249,20 +257,6 @@ def _refuse_hand_values(given: list[str]) -> None:
         raise click.UsageError(f"give --calib or {', '.join(given)}, not both")
 
 
-def _estimate_range(left_image, right_image, name, rectified_here: bool):
-    try:
-        return search_range.estimate_disparity_range(left_image, right_image)
-    except ValueError as exc:
-        raise click.ClickException(f"{name}: {_for_rig(str(exc), rectified_here)}") from None
-
-
-def _for_rig(problem: str, rectified_here: bool) -> str:
-    """A pair problem as said of views that vsmatch rectified itself (a raw rig's)."""
-    if rectified_here:
-        return problem.replace(search_range.NOT_RECTIFIED, search_range.STILL_NOT_RECTIFIED)
-    return problem
-
-
 def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
     """Under --verbose: the estimated noise and the stage times."""
     if result.noise_sigma is not None:
@@ -284,13 +278,13 @@ def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
 
 
 def write_rectified(folder, left, right, camera: geometry.Calibration,
-                    max_disp: int | None) -> None:
-    """im0.png, im1.png and a Middlebury calib.txt of the rectified rig in ``folder``."""
+                    search: tuple[int, int] | None) -> None:
+    """im0.png, im1.png and a Middlebury calib.txt of the rectified rig in ``folder``,
+    with the range ``search`` (min, max) that was searched, when one was."""
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
     size = left.shape[1::-1]
     with io.all_or_none():
         io.imwrite_atomic(folder / RECTIFIED_FILES[0], left)
         io.imwrite_atomic(folder / RECTIFIED_FILES[1], right)
         io.write_text_atomic(folder / RECTIFIED_FILES[2], rig.middlebury_calib_text(
-            camera, size, None if max_disp is None else max_disp + 1))
+            camera, size, search))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import re
 import time
 from pathlib import Path
 
@@ -84,6 +85,16 @@ class FramePairs:
                 f"{'s' if extra > 1 else ''} without a partner, counted as failed")
 
 
+#: The files ``--frames`` holds: NNNNNN.pfm and NNNNNN_confidence.pfm.
+FRAME_FILE = re.compile(r"\d{6}(_confidence)?\.pfm")
+
+
+def is_frame_file(entry: Path) -> bool:
+    """An earlier run's frame file (what ``--overwrite`` may replace)."""
+    return entry.is_file() and not entry.is_symlink() and bool(
+        FRAME_FILE.fullmatch(entry.name))
+
+
 def write_video(path: str, pictures, fps: float, codec: str) -> int:
     """Write ``pictures`` (BGR, one size) to the video ``path``; the number written. The
     file is opened again and its frames counted: a writer that could not write (a full
@@ -137,7 +148,8 @@ def video_frame_count(path: str) -> int:
                    "(NNNNNN.pfm, NNNNNN_confidence.pfm); a folder that holds anything is "
                    "refused unless --overwrite.")
 @click.option("--overwrite", is_flag=True,
-              help="Replace a --frames folder that holds files, as a whole.")
+              help="Replace a --frames folder of an earlier run's frames, as a whole (a "
+                   "folder that holds anything else is refused).")
 @click.option("--max-disp", type=MAX_DISP, default=None,
               help="Largest disparity searched; default: the calibration's, else found "
                    "from the first frame (and again when the scene comes closer).")
@@ -169,6 +181,10 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
     check_outputs(inputs, [output], folders={frames_dir: []} if frames_dir else {})
     if frames_dir is not None:  # the folder is replaced as a whole: nothing else in it
         check_outside(Path(frames_dir), [*inputs, output], "--frames folder")
+        try:
+            io.check_replaceable_folder(frames_dir, overwrite=overwrite, ours=is_frame_file)
+        except OSError as exc:
+            raise click.ClickException(str(exc)) from None
     stereo = StereoMatcher(max_disp=max_disp, min_disp=min_disp, config=config,
                            calib=list(calib) or None)
     sources = [_open(name) for name in names]
@@ -196,7 +212,8 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
 
     try:
         with io.all_or_none():  # the video and the frames folder together, or neither
-            staged = (io.staged_folder(frames_dir, overwrite=overwrite) if frames_dir
+            staged = (io.staged_folder(frames_dir, overwrite=overwrite,
+                                               ours=is_frame_file) if frames_dir
                       else contextlib.nullcontext(None))
             with staged as frames_folder:
                 io.write_atomic(out, lambda tmp: _write_or_refuse(

@@ -17,7 +17,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-from ..io import current_umask
+from ..io import current_umask, output_folder
 from .base import DatasetError
 from .middlebury2014 import SCENE_FILES, missing_files
 
@@ -71,12 +71,18 @@ def download_middlebury2014(resolution: str, to: str | Path, *, mirror: str | No
         raise DownloadError(f"{target} exists but is not a complete dataset; move it away "
                             "and run again")
     to = Path(to)
-    to.mkdir(parents=True, exist_ok=True)
-    remove_stale_staging(target)
     cache = to / CACHE
-    archives = [_fetch(name, mirror or BASE_URL, cache, progress, retries)
-                for name in archive_names(resolution)]
-    _unpack_training(archives, resolution, target)
+    with output_folder(to):
+        remove_stale_staging(target)
+        try:
+            archives = [_fetch(name, mirror or BASE_URL, cache, progress, retries)
+                        for name in archive_names(resolution)]
+            _unpack_training(archives, resolution, target)
+        except BaseException:
+            # Archives fetched whole are kept for the next run; an empty cache is not.
+            if cache.is_dir() and not any(cache.iterdir()):
+                cache.rmdir()
+            raise
     shutil.rmtree(cache, ignore_errors=True)
     return target, True
 
