@@ -8,6 +8,8 @@ import pytest
 from vsmatch import datasets, evaluation, pipeline, pyramid
 from vsmatch.config import load_config
 
+from conftest import standard_scenes
+
 #: Measured with the fast config (headline: nonocc, KITTI all), and the ceiling we hold.
 MEASURED = {"middlebury2": (4.54, 4.9), "middlebury-third": (9.39, 9.66),
             "middlebury2014-quarter": (11.60, 12.0), "kitti2015": (6.95, 7.3)}
@@ -41,7 +43,7 @@ def test_fast_is_bundled_and_searches_one_level_down(rng):
 @pytest.mark.data
 @pytest.mark.parametrize("dataset", list(MEASURED))
 def test_fast_has_at_most_six_tenths_of_sgbms_errors(data_dir, dataset):
-    scenes = datasets.load_dataset(dataset, data_dir)
+    scenes = standard_scenes(datasets.load_dataset(dataset, data_dir))
     report = evaluation.evaluate(scenes, {"fast": "fast", "sgbm": "opencv-sgbm"},
                                  dataset=dataset)
     mask = "all" if dataset.startswith("kitti") else "nonocc"

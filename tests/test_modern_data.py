@@ -12,6 +12,8 @@ from click.testing import CliRunner
 from vsmatch import datasets, evaluation
 from vsmatch.cli import main
 
+from conftest import standard_scenes
+
 
 def test_kitti2012_layout_is_read_with_both_masks(tmp_path, rng):
     training = tmp_path / "kitti2012" / "training"
@@ -56,7 +58,7 @@ def test_threshold_does_not_apply_to_kitti(tmp_path):
 def test_middlebury2014_reader(data_dir):
     scenes = datasets.load_dataset("middlebury2014-quarter", data_dir)
     assert [s.name for s in scenes] == ["Adirondack", "ArtL", "Jadeplant", "Motorcycle",
-                                        "MotorcycleE", "Piano", "PianoL", "Teddy"]
+                                        "MotorcycleE", "Piano", "PianoL", "Teddy", "Vintage"]
     adirondack = scenes[0]
     assert adirondack.max_disp == 72 and adirondack.calib.ndisp == 73  # calib.txt ndisp
     nonocc = adirondack.masks["nonocc"]
@@ -78,7 +80,7 @@ def test_kitti2015_reader(data_dir):
 
 @pytest.fixture(scope="module")
 def middlebury2014_report(data_dir):
-    scenes = datasets.load_dataset("middlebury2014-quarter", data_dir)
+    scenes = standard_scenes(datasets.load_dataset("middlebury2014-quarter", data_dir))
     disparities = {}
     report = evaluation.evaluate(scenes, {"default": "default", "sgbm": "opencv-sgbm"},
                                  dataset="middlebury2014-quarter", disparities=disparities)

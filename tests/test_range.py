@@ -131,3 +131,77 @@ def test_a_negative_range_matches_every_column_with_a_partner_in_view(data_dir):
     columns = np.arange(width)[None, :]
     assert not (finite & (columns - result.disparity > width - 0.5)).any()
     assert (result.confidence[~finite] == 0).all()
+
+
+def write_views(folder, left, right):
+    cv2.imwrite(str(folder / "l.png"), left)
+    cv2.imwrite(str(folder / "r.png"), right)
+    return folder / "l.png", folder / "r.png"
+
+
+def searched(result):
+    """The range a -v run says it searches."""
+    assert result.exit_code == 0, result.output
+    line = next(l for l in result.output.splitlines() if "searching disparities" in l)
+    low, high = line.split()[-1].split("..")
+    return int(low), int(high)
+
+
+def test_the_found_range_stops_where_the_calibration_puts_infinity(tmp_path, rng):
+    """A point at infinity has d = -doffs: the found range does not reach below it."""
+    from test_never_silent import verged_pair
+
+    views = write_views(tmp_path, *verged_pair(rng))
+    free = searched(CliRunner().invoke(main, ["-v", "run", *map(str, views), "-o",
+                                              str(tmp_path / "a.pfm")]))
+    assert free[0] < -14  # the pair's own -12, with the margin
+    (tmp_path / "calib.txt").write_text("cam0=[300 0 120; 0 300 80; 0 0 1]\n"
+                                        "cam1=[300 0 134; 0 300 80; 0 0 1]\n"
+                                        "doffs=14\nbaseline=60\n")
+    bounded = searched(CliRunner().invoke(main, ["-v", "run", *map(str, views), "-o",
+                                                 str(tmp_path / "b.pfm"), "--calib",
+                                                 str(tmp_path / "calib.txt")]))
+    assert bounded[0] == -14 and bounded[1] == free[1]
+    disp = io.read_disparity(tmp_path / "b.pfm")
+    assert np.mean(np.abs(disp[10:70, 30:-30] + 12) < 1) > 0.9
+
+
+def test_a_verged_rigs_rectified_folder_keeps_its_range(tmp_path, rng):
+    """run --rectified writes the searched range's bottom (dmin) beside ndisp: run again
+    on the folder, the same negative range is searched (it was cut to 0..max)."""
+    from test_never_silent import shifted_pair
+    from test_never_silent_2 import write_opencv_rig
+
+    top, bottom = (shifted_pair(rng, dx, height=48, width=160) for dx in (-12, 10))
+    left, right = np.vstack([top[0], bottom[0]]), np.vstack([top[1], bottom[1]])
+    views = write_views(tmp_path, left, right)
+    rig_file = write_opencv_rig(tmp_path / "rig.yaml")
+    first = searched(CliRunner().invoke(main, [
+        "-v", "run", *map(str, views), "--calib", str(rig_file), "-o", str(tmp_path / "a.pfm"),
+        "--min-disp", "-20", "--max-disp", "16", "--rectified", str(tmp_path / "rect")]))
+    assert first == (-20, 16)
+    calib = vsmatch.read_calibration(tmp_path / "rect" / "calib.txt")
+    assert calib.search_range(left.shape[1]) == (-20, 16)
+    again = searched(CliRunner().invoke(main, [
+        "-v", "run", str(tmp_path / "rect/im0.png"), str(tmp_path / "rect/im1.png"),
+        "--calib", str(tmp_path / "rect/calib.txt"), "-o", str(tmp_path / "b.pfm")]))
+    assert again == (-20, 16)
+
+
+def test_min_disp_alone_is_honoured_by_the_stream_matcher(rng):
+    left, right = textured_pair(rng, 12, height=80, width=200)
+    stereo = vsmatch.StereoMatcher(min_disp=4, config="fast")
+    stereo.compute(left, right)
+    assert stereo.range[0] == 4 and stereo.range[1] >= 12
+
+
+def test_min_disp_alone_is_honoured_by_video(tmp_path, rng):
+    from test_video import write_videos
+
+    write_videos(tmp_path, rng)
+    result = CliRunner().invoke(main, ["-v", "video", str(tmp_path / "left.avi"),
+                                       str(tmp_path / "right.avi"), "-o",
+                                       str(tmp_path / "d.avi"), "--min-disp", "3",
+                                       "--config", "fast"])
+    assert result.exit_code == 0, result.output
+    assert "disparities 3.." in result.output, result.output
