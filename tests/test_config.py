@@ -1,3 +1,4 @@
+import numpy as np
 import pytest
 
 from vsmatch.config import (Config, ConfigError, bundled_config_names, config_from_dict,
@@ -107,3 +108,47 @@ def test_a_file_can_start_from_a_bundled_config(tmp_path):
     mine.write_text("base: nope\n")
     with pytest.raises(ConfigError, match="base must name a bundled config"):
         load_config(mine)
+
+
+@pytest.mark.parametrize("text, key", [
+    ("arms:\n  tau1: 10\narms:\n  tau2: 5\n", "arms"),
+    ("base: default\nbase: fast\n", "base"),
+    ("cost:\n  lambda_ad: 10\n  lambda_ad: 20\n", "lambda_ad")])
+def test_a_key_given_twice_is_refused(tmp_path, text, key):
+    """PyYAML keeps the last of two equal keys: one of the user's values would be
+    dropped without a word."""
+    path = tmp_path / "twice.yaml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=f"'{key}' is given twice"):
+        load_config(str(path))
+
+
+def test_a_calibration_key_given_twice_is_refused(tmp_path):
+    from vsmatch import rig
+    from vsmatch.geometry import CalibrationError
+
+    cam = ("  camera_model: pinhole\n  intrinsics: [300, 300, 80, 48]\n"
+           "  distortion_model: radtan\n  distortion_coeffs: [0, 0, 0, 0]\n"
+           "  resolution: [160, 96]\n")
+    path = tmp_path / "camchain.yaml"
+    path.write_text("cam0:\n" + cam + "cam1:\n" + cam + "  T_cn_cnm1: [[1, 0, 0, -0.06], "
+                    "[0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\ncam0:\n" + cam)
+    with pytest.raises(CalibrationError, match="'cam0' is given twice"):
+        rig.read_rig([path])
+
+
+def test_a_huge_whole_number_is_out_of_range(tmp_path):
+    path = tmp_path / "huge.yaml"
+    path.write_text("arms:\n  l2: 123456789012345678901234567890\n")
+    with pytest.raises(ConfigError, match=r"arms.l2 = .* is out of range"):
+        load_config(str(path))
+
+
+def test_a_budget_too_small_for_the_overlap_names_the_overlap(rng):
+    from vsmatch import pipeline
+
+    cfg = config_from_dict({"memory": {"overlap": 4096, "max_mb": 64}},
+                           base=load_config("default"))
+    left = rng.integers(0, 256, (64, 96, 3), dtype=np.uint8)
+    with pytest.raises(ValueError, match="memory.overlap = 4096"):
+        pipeline.check_pair(left, left.copy(), 16, cfg)

@@ -17,6 +17,8 @@ from typing import Any
 
 import yaml
 
+from . import yamlsafe
+
 
 class ConfigError(ValueError):
     """A configuration that cannot be used; the message is one line."""
@@ -344,10 +346,16 @@ def _check_value(key: str, spec: dataclasses.Field, value: Any) -> Any:
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ConfigError(f"config value {key} = {quote(value)} must be a number")
-    if not math.isfinite(value):
+    lo, hi = meta.get("range", (None, None))
+    if isinstance(value, int) and (kind is int or abs(value) > 1e300):
+        # Whole already: a huge one is out of range, not "not a whole number".
+        if (lo is not None and value < lo) or (hi is not None and value > hi):
+            raise ConfigError(f"config value {key} = {quote(value)} is out of range "
+                              f"[{lo}, {hi}]")
+    elif not math.isfinite(value):
         raise ConfigError(f"config value {key} = {quote(value)} must be a finite number")
-    if kind is int:
-        if float(value) != int(value):
+    elif kind is int:
+        if value != int(value):
             raise ConfigError(f"config value {key} = {quote(value)} must be a whole number")
         value = int(value)
     else:
@@ -356,7 +364,6 @@ def _check_value(key: str, spec: dataclasses.Field, value: Any) -> Any:
     if choices is not None and value not in choices:
         allowed = ", ".join(str(c) for c in choices)
         raise ConfigError(f"config value {key} = {quote(value)} is not one of {allowed}")
-    lo, hi = meta.get("range", (None, None))
     if (lo is not None and value < lo) or (hi is not None and value > hi):
         raise ConfigError(f"config value {key} = {quote(value)} is out of range [{lo}, {hi}]")
     return value
@@ -454,9 +461,11 @@ def _parse_config(name_or_path: str) -> Config:
         raise ConfigError(f"config {origin} is larger than {MAX_CONFIG_BYTES // 1024} kB; "
                           "no real config is")
     try:
-        data = yaml.safe_load(text)
+        data = yamlsafe.load(text)
     except RecursionError:
         raise ConfigError(f"config {origin} is nested too deeply") from None
+    except yamlsafe.DuplicateKeyError as exc:
+        raise ConfigError(f"config {origin}: {exc.problem}") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""

@@ -331,8 +331,11 @@ def stripe_rows(width: int, n_disp: int, cfg: Config) -> int:
     rows = cfg.memory.max_mb * 2**20 // row_bytes
     if rows < 2 * cfg.memory.overlap + 16:
         need = math.ceil((2 * cfg.memory.overlap + 16) * row_bytes / 2**20)
-        raise ValueError(f"a memory budget of {cfg.memory.max_mb} MB is too small for rows of "
-                         f"{width} pixels x {n_disp} disparities; allow at least {need} MB")
+        raise ValueError(f"a memory budget of {cfg.memory.max_mb} MB is too small for "
+                         f"stripes of 16 rows and twice memory.overlap = {cfg.memory.overlap} "
+                         f"rows of {width} pixels x {n_disp} disparities; allow at least "
+                         f"{need} MB" + (" or a smaller overlap" if cfg.memory.overlap > 64
+                                         else ""))
     return int(rows)
 
 

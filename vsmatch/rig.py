@@ -31,6 +31,7 @@ import cv2
 import numpy as np
 import yaml
 
+from . import yamlsafe
 from .geometry import FLOAT32_MAX, Calibration, CalibrationError
 
 #: Bytes of a calibration file read at most (real ones are a few kB).
@@ -108,7 +109,7 @@ def _yaml(path: Path, text: str):
     """The YAML document. Its size with every alias expanded is counted on the parsed
     node graph first (aliases point to one node there): a few hundred bytes of nested
     aliases expand to gigabytes, and such a file is refused before anything is built."""
-    loader = yaml.SafeLoader(text)
+    loader = yamlsafe.UniqueKeyLoader(text)
     try:
         root = loader.get_single_node()
         if root is None:
@@ -118,6 +119,8 @@ def _yaml(path: Path, text: str):
                                    f"(over {MAX_CALIBRATION_NODES} with its aliases "
                                    "expanded)")
         return loader.construct_document(root)  # from the nodes parsed once
+    except yamlsafe.DuplicateKeyError as exc:
+        raise CalibrationError(f"{path}: {exc.problem}") from None
     except (yaml.YAMLError, RecursionError):
         raise CalibrationError(f"{path}: not valid YAML") from None
     finally:
