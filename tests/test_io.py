@@ -82,3 +82,33 @@ def test_failed_write_leaves_no_file(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         io.write_atomic(tmp_path / "out.pfm", broken)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.data
+def test_twelve_bit_views_in_16_bit_pngs_match_as_the_8_bit_ones(data_dir, tmp_path):
+    """A machine-vision camera's 12-bit values (0..4095) in 16-bit PNGs keep their 8 most
+    significant bits in use (not the top byte, 0..15): the same disparities as the 8-bit
+    pair, and the range is still found from the pair."""
+    from click.testing import CliRunner
+    from vsmatch.cli import main
+
+    for name in ("imL", "imR"):
+        view = cv2.imread(str(data_dir / "middlebury2" / "tsukuba" / f"{name}.png"))
+        cv2.imwrite(str(tmp_path / f"{name}8.png"), view)
+        cv2.imwrite(str(tmp_path / f"{name}12.png"), view.astype(np.uint16) * 16 + 7)
+    outputs = {}
+    for bits in (8, 12):
+        out = tmp_path / f"d{bits}.pfm"
+        result = CliRunner().invoke(main, ["run", str(tmp_path / f"imL{bits}.png"),
+                                           str(tmp_path / f"imR{bits}.png"), "-o", str(out),
+                                           "--config", "fast"])
+        assert result.exit_code == 0, result.output
+        outputs[bits] = out.read_bytes()
+    assert outputs[8] == outputs[12]
+
+
+def test_the_same_file_as_both_views_is_refused(tmp_path, rng):
+    view = rng.integers(0, 256, (32, 48, 3), dtype=np.uint8)
+    cv2.imwrite(str(tmp_path / "v.png"), view)
+    with pytest.raises(io.ImageError, match="the same file"):
+        io.read_pair(tmp_path / "v.png", tmp_path / "v.png")

@@ -130,3 +130,21 @@ def test_a_full_frames_folder_is_named_by_its_own_path(tmp_path, rng):
         assert not list(disk.iterdir()) and not (tmp_path / "d.avi").exists()
     finally:
         subprocess.run(["umount", str(disk)], capture_output=True)
+
+
+def test_two_videos_of_different_frame_rates_are_refused(tmp_path, rng):
+    write_videos(tmp_path, rng)
+    capture = cv2.VideoCapture(str(tmp_path / "right.avi"))
+    writer = cv2.VideoWriter(str(tmp_path / "slow.avi"), cv2.VideoWriter_fourcc(*"MJPG"), 5,
+                             (128, 64))
+    while True:
+        ok, frame = capture.read()
+        if not ok:
+            break
+        writer.write(frame)
+    writer.release()
+    capture.release()
+    result = invoke("video", tmp_path / "left.avi", tmp_path / "slow.avi", "-o",
+                    tmp_path / "d.avi", "--max-disp", 16)
+    assert result.exit_code == 1 and "frames per second" in result.output, result.output
+    assert not (tmp_path / "d.avi").exists()

@@ -65,10 +65,17 @@ def read_image(path: str | Path, *, max_mb: float | None = None,
                max_megapixels: float = MAX_MEGAPIXELS) -> np.ndarray:
     """Read a stereo view as (H, W, 3) uint8 BGR.
 
-    Grey images are repeated over three channels, 16-bit images are scaled to 8 bits
-    (the top byte), and an alpha channel is dropped. The size is checked from the header
-    before decoding (:func:`check_image_size`).
+    Grey images are repeated over three channels and an alpha channel is dropped.
+    16-bit images keep their 8 most significant bits *in use*: a 12-bit camera's values
+    (0..4095 in a 16-bit PNG) are scaled by 1/16, not cut to their top byte (0..15).
+    The size is checked from the header before decoding (:func:`check_image_size`).
     """
+    raw = _decode(path, max_mb, max_megapixels)
+    return _to_bgr8(path, raw, _significant_shift(raw))
+
+
+def _decode(path: str | Path, max_mb: float | None, max_megapixels: float) -> np.ndarray:
+    """The image as stored (uint8 or uint16, any channels), its size checked first."""
     path = Path(path)
     if not path.exists():
         raise ImageError(f"{path}: file not found")
@@ -88,10 +95,24 @@ def read_image(path: str | Path, *, max_mb: float | None = None,
                          max_megapixels=max_megapixels)
     if image is None or image.size == 0:
         raise ImageError(f"{path}: not a readable image (unknown format, or truncated)")
-    if image.dtype == np.uint16:
-        image = (image >> 8).astype(np.uint8)
-    elif image.dtype != np.uint8:
+    if image.dtype not in (np.uint8, np.uint16):
         raise ImageError(f"{path}: unsupported pixel type {image.dtype} (8- or 16-bit expected)")
+    return image
+
+
+def _significant_shift(*images: np.ndarray) -> int:
+    """The right shift that keeps the 8 most significant bits in use of 16-bit images
+    (all of them together, so that two views keep one scale); 0 for 8-bit ones."""
+    if images[0].dtype != np.uint16:
+        return 0
+    top = max(int(image.max()) for image in images)
+    return max(0, top.bit_length() - 8)
+
+
+def _to_bgr8(path: str | Path, image: np.ndarray, shift: int) -> np.ndarray:
+    """A decoded image as (H, W, 3) uint8 BGR, 16-bit values shifted right by ``shift``."""
+    if image.dtype == np.uint16:
+        image = (image >> shift).astype(np.uint8)
     if image.ndim == 2:
         image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
     elif image.shape[2] == 4:
@@ -126,9 +147,18 @@ def native_stderr_silenced():
 
 def read_pair(left_path: str | Path, right_path: str | Path, *, max_mb: float | None = None,
               max_megapixels: float = MAX_MEGAPIXELS) -> tuple[np.ndarray, np.ndarray]:
-    """Both views of a stereo pair (see :func:`read_image`), which must be one size."""
-    limits = dict(max_mb=max_mb, max_megapixels=max_megapixels)
-    left, right = read_image(left_path, **limits), read_image(right_path, **limits)
+    """Both views of a stereo pair (see :func:`read_image`; 16-bit views keep one scale),
+    which must be two files of one size and bit depth."""
+    if same_file(Path(left_path), Path(right_path)):
+        raise ImageError(f"{left_path} and {right_path} are the same file: give the left "
+                         "and the right view")
+    raw = [_decode(path, max_mb, max_megapixels) for path in (left_path, right_path)]
+    if raw[0].dtype != raw[1].dtype:
+        raise ImageError(f"{left_path} is {raw[0].dtype.itemsize * 8}-bit and {right_path} "
+                         f"{raw[1].dtype.itemsize * 8}-bit: give both views of one camera")
+    shift = _significant_shift(*raw)  # one scale for both views
+    left, right = (_to_bgr8(path, image, shift)
+                   for path, image in zip((left_path, right_path), raw))
     if left.shape != right.shape:
         raise ImageError(f"{left_path} ({left.shape[1]}x{left.shape[0]}) and {right_path} "
                          f"({right.shape[1]}x{right.shape[0]}) differ in size")

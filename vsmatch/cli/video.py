@@ -188,6 +188,7 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
     stereo = StereoMatcher(max_disp=max_disp, min_disp=min_disp, config=config,
                            calib=list(calib) or None)
     sources = [_open(name) for name in names]
+    _check_frame_rates(names, sources)
     fps = sources[0].get(cv2.CAP_PROP_FPS) or 10.0
     pairs = FramePairs(names, sources)
     count, start = 0, time.perf_counter()
@@ -230,6 +231,20 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
     echo(ctx, f"wrote {output} ({count} frames)")
     if unpaired is not None:
         raise click.ClickException(unpaired)
+
+
+def _check_frame_rates(names: list[str], sources: list[cv2.VideoCapture]) -> None:
+    """Two video files of different frame rates would pair frames of different moments
+    (a camera's rate is what it delivers: not checked)."""
+    if len(sources) != 2 or any(name.isdigit() for name in names):
+        return
+    rates = [source.get(cv2.CAP_PROP_FPS) for source in sources]
+    if all(rate > 0 for rate in rates) and abs(rates[0] - rates[1]) > 0.01 * max(rates):
+        for source in sources:
+            source.release()
+        raise click.ClickException(
+            f"{names[0]} runs at {rates[0]:g} frames per second and {names[1]} at "
+            f"{rates[1]:g}: frame by frame they would pair different moments")
 
 
 def _write_or_refuse(tmp: str, pictures, fps: float, out: Path, left: str) -> None:
