@@ -103,3 +103,98 @@ def test_ply_is_binary_little_endian_and_reads_back(tmp_path):
     np.testing.assert_array_equal(np.stack([vertex[a] for a in "xyz"], axis=1), points)
     np.testing.assert_array_equal(
         np.stack([vertex[c] for c in ("red", "green", "blue")], axis=1), colours)
+
+
+MIDDLEBURY = ("cam0=[{f} 0 {cx}; 0 {fy} 15; {last}]\ncam1=[500 0 22.5; 0 510 15; 0 0 1]\n"
+              "doffs={doffs}\nbaseline=100\nwidth=40\nheight=30\n")
+
+
+@pytest.mark.parametrize("changes, message", [
+    (dict(fy=-510), "vertical focal length must be positive"),
+    (dict(fy=0), "vertical focal length must be positive"),
+    (dict(last="5 5 5"), "not a camera matrix"),
+])
+def test_a_calib_txt_no_camera_has_is_refused(tmp_path, changes, message):
+    values = dict(f=500, cx=20.5, fy=510, last="0 0 1", doffs=2)
+    values.update(changes)
+    path = tmp_path / "calib.txt"
+    path.write_text(MIDDLEBURY.format(**values))
+    with pytest.raises(geometry.CalibrationError, match=message):
+        geometry.read_calibration(path)
+
+
+@pytest.mark.parametrize("changes, message", [
+    (dict(cx=-5000), "principal point"),
+    (dict(doffs=-1000), "doffs = -1000"),
+])
+def test_a_principal_point_outside_the_views_is_refused(tmp_path, changes, message):
+    values = dict(f=500, cx=20.5, fy=510, last="0 0 1", doffs=2)
+    values.update(changes)
+    path = tmp_path / "calib.txt"
+    path.write_text(MIDDLEBURY.format(**values))
+    calib = geometry.read_calibration(path)
+    assert message in calib.size_problem((30, 40, 3))
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--cx", "1e9"], "principal point"),
+    (["--doffs", "-1000"], "doffs = -1000"),
+])
+def test_hand_typed_values_no_camera_has_are_refused(pair_files, tmp_path, args, message):
+    from click.testing import CliRunner
+    from vsmatch.cli import main
+
+    result = CliRunner().invoke(main, ["run", *map(str, pair_files), "-o",
+                                       str(tmp_path / "d.pfm"), "--max-disp", "8", "--focal",
+                                       "500", "--baseline", "100", "--depth",
+                                       str(tmp_path / "z.pfm"), *args])
+    assert result.exit_code == 1 and message in result.output, result.output
+    assert not (tmp_path / "d.pfm").exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--alpha", "0.5"], "--alpha is for a raw rig"),
+    (["--focal", "500", "--baseline", "100"], "neither is asked for"),
+    (["--max-depth", "10", "--focal", "500", "--baseline", "100", "--depth", "z.pfm"],
+     "--max-depth limits the --cloud"),
+])
+def test_options_that_would_do_nothing_are_refused(pair_files, tmp_path, monkeypatch, args,
+                                                   message):
+    from click.testing import CliRunner
+    from vsmatch.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(main, ["run", *map(str, pair_files), "-o", "d.pfm",
+                                       "--max-disp", "8", *args])
+    assert result.exit_code == 2 and message in result.output, result.output
+
+
+def test_the_api_names_the_argument_it_cannot_use(rng):
+    disp = np.full((30, 40), 5.0, np.float32)
+    image = rng.integers(0, 256, (30, 40, 3), dtype=np.uint8)
+    calib = geometry.Calibration(focal=500.0, baseline=100.0)
+    cases = [
+        (lambda: geometry.point_cloud(disp, image[:20], calib), "image is 40x20"),
+        (lambda: geometry.point_cloud(disp, image.astype(np.uint16), calib), "image must be"),
+        (lambda: geometry.point_cloud(disp, np.dstack([image, image[..., :1]]), calib),
+         "image must be"),
+        (lambda: geometry.point_cloud(disp, image, calib, max_depth=float("nan")),
+         "max_depth"),
+        (lambda: geometry.point_cloud(disp[None], image, calib), "disparity must be"),
+        (lambda: geometry.depth_from_disparity(disp, "calib.txt"), "calib must be"),
+        (lambda: geometry.Calibration(focal="600", baseline=1.0), "focal must be a number"),
+    ]
+    for call, message in cases:
+        with pytest.raises(ValueError, match=message):
+            call()
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(alpha=float("nan")), "alpha"), (dict(alpha=5), "alpha"),
+    (dict(calib=123), "calib must be"), (dict(max_disp="16"), "max_disp"),
+])
+def test_the_stream_matcher_refuses_what_the_cli_refuses(kwargs, message):
+    import vsmatch
+
+    with pytest.raises(ValueError, match=message):
+        vsmatch.StereoMatcher(**kwargs)

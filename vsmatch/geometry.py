@@ -43,10 +43,23 @@ class Calibration:
     def __post_init__(self):
         for name in ("focal", "baseline", "cx", "cy", "doffs", "focal_y"):
             value = getattr(self, name)
+            if value is None and name in ("focal", "baseline", "doffs"):
+                raise CalibrationError(f"{name} must be a number, got None")
+            if value is not None and (isinstance(value, bool) or not isinstance(
+                    value, (int, float, np.integer, np.floating))):
+                raise CalibrationError(f"{name} must be a number, got {value!r}"[:120])
             if value is not None and not np.isfinite(value):
                 raise CalibrationError(f"{name} must be a finite number, got {value}")
+        for name in ("ndisp", "min_disp"):
+            value = getattr(self, name)
+            if value is not None and (isinstance(value, bool) or not isinstance(
+                    value, (int, np.integer))):
+                raise CalibrationError(f"{name} must be a whole number, got {value!r}"[:120])
         if not self.focal > 0:
             raise CalibrationError(f"focal length must be positive, got {self.focal}")
+        if self.focal_y is not None and not self.focal_y > 0:
+            raise CalibrationError(f"the vertical focal length must be positive, got "
+                                   f"{self.focal_y:g}")
         if not self.baseline > 0:
             raise CalibrationError(f"baseline must be positive, got {self.baseline}")
         if self.ndisp is not None and self.ndisp < 1:
@@ -80,11 +93,22 @@ class Calibration:
         return None
 
     def size_problem(self, shape: tuple[int, ...]) -> str | None:
-        """Why views of ``shape`` (H, W, ...) do not fit this calibration's size, or None."""
-        if self.size is None or tuple(self.size) == (shape[1], shape[0]):
-            return None
-        return (f"the calibration is for {self.size[0]}x{self.size[1]} views (width, "
-                f"height), these are {shape[1]}x{shape[0]}")
+        """Why views of ``shape`` (H, W, ...) do not fit this calibration, or None: another
+        size than the calibration's, the left principal point outside the views, or the
+        right one (``cx + doffs``) more than a view's width away (no rectified rig has
+        them so: depths and clouds would be upside down, sheared or empty)."""
+        height, width = shape[:2]
+        if self.size is not None and tuple(self.size) != (width, height):
+            return (f"the calibration is for {self.size[0]}x{self.size[1]} views (width, "
+                    f"height), these are {width}x{height}")
+        cx, cy = self.principal_point(shape)
+        if not (0 <= cx < width and 0 <= cy < height):
+            return (f"the principal point ({cx:g}, {cy:g}) lies outside the {width}x{height} "
+                    "views")
+        if abs(self.doffs) >= width:
+            return (f"doffs = {self.doffs:g} puts the right view's principal point more than "
+                    f"the views' width ({width}) away from the left one's")
+        return None
 
     def principal_point(self, shape: tuple[int, ...]) -> tuple[float, float]:
         height, width = shape[:2]
@@ -151,6 +175,8 @@ def _middlebury(fields: dict[str, str]) -> Calibration:
     cam0 = _numbers(fields, "cam0")
     if cam0.size != 9:
         raise ValueError("cam0 must be a 3x3 matrix")
+    if cam0[3] != 0 or not np.allclose(cam0[6:], (0, 0, 1)):
+        raise ValueError("cam0 is not a camera matrix [f 0 cx; 0 fy cy; 0 0 1]")
     ndisp = _integer(fields, "ndisp") if "ndisp" in fields else None
     doffs = _number(fields, "doffs") if "doffs" in fields else 0.0
     min_disp = _integer(fields, "dmin") if "dmin" in fields else 0
@@ -190,7 +216,8 @@ def _kitti(fields: dict[str, str]) -> Calibration:
 def depth_from_disparity(disp: np.ndarray, calib: Calibration) -> np.ndarray:
     """Depth ``f B / (d + doffs)`` (float32, the baseline's unit); ``inf`` where the
     disparity is invalid or ``d + doffs <= 0`` (a point at or beyond infinity)."""
-    disp = np.asarray(disp, dtype=np.float64)
+    _check_calibration_argument(calib)
+    disp = _disparity_argument(disp)
     denominator = disp + calib.doffs
     depth = np.full(disp.shape, np.inf, dtype=np.float32)
     ok = np.isfinite(denominator) & (denominator > 0)
@@ -206,6 +233,18 @@ def point_cloud(disp: np.ndarray, image: np.ndarray, calib: Calibration, *,
     and ``colours`` (N, 3) uint8 in RGB order, row by row. ``image`` is the left view,
     BGR or grey. With ``max_depth``, points farther than it are left out.
     """
+    disp = _disparity_argument(disp)
+    if not isinstance(image, np.ndarray) or image.dtype != np.uint8 or not (
+            image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 3)):
+        raise ValueError("image must be the left view as (H, W, 3) BGR or (H, W) grey "
+                         f"uint8, got {_describe_array(image)}")
+    if image.shape[:2] != disp.shape:
+        raise ValueError(f"image is {image.shape[1]}x{image.shape[0]} but the disparity "
+                         f"{disp.shape[1]}x{disp.shape[0]}: give the left view of the pair")
+    if max_depth is not None and (isinstance(max_depth, bool) or not isinstance(
+            max_depth, (int, float, np.number)) or not max_depth > 0
+            or not np.isfinite(max_depth)):
+        raise ValueError(f"max_depth must be a positive finite number, got {max_depth!r}")
     depth = depth_from_disparity(disp, calib)
     keep = np.isfinite(depth)
     if max_depth is not None:
@@ -220,6 +259,30 @@ def point_cloud(disp: np.ndarray, image: np.ndarray, calib: Calibration, *,
     colours = (np.repeat(pixels[:, None], 3, axis=1) if image.ndim == 2
                else pixels[:, ::-1]).astype(np.uint8)
     return points, np.ascontiguousarray(colours)
+
+
+def _check_calibration_argument(calib) -> None:
+    if not isinstance(calib, Calibration):
+        raise ValueError("calib must be a vsmatch.Calibration (vsmatch.read_calibration "
+                         f"reads a file), got {type(calib).__name__}")
+
+
+def _disparity_argument(disp) -> np.ndarray:
+    """``disp`` as an (H, W) float64 array, or a ValueError naming the argument."""
+    try:
+        array = np.asarray(disp, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"disparity must be an (H, W) array of numbers, got "
+                         f"{type(disp).__name__}") from None
+    if array.ndim != 2:
+        raise ValueError(f"disparity must be an (H, W) array, got shape {array.shape}")
+    return array
+
+
+def _describe_array(value) -> str:
+    if isinstance(value, np.ndarray):
+        return f"{value.dtype} of shape {value.shape}"
+    return type(value).__name__
 
 
 def ply_vertices(points: np.ndarray, colours: np.ndarray) -> np.ndarray:

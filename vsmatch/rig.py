@@ -24,6 +24,7 @@ Calibration`, in the calibration's units. Disparity, depth and points are then i
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -63,8 +64,9 @@ def is_raw_rig(paths) -> bool:
     if len(paths) == 2:
         return True
     text = _read(paths[0])
-    return text.lstrip().startswith(("%YAML", "<?xml", "<opencv_storage")) or (
-        "cam0:" in text and "cam1:" in text) or "camera_matrix" in text
+    return _written_by_opencv(text) or (
+        "cam0:" in text and "cam1:" in text) or "camera_matrix" in text or any(
+        re.search(rf"^{key}\s*:", text, re.MULTILINE) for key in STEREO_CALIBRATE_KEYS)
 
 
 def read_rig(paths) -> RawRig:
@@ -77,16 +79,71 @@ def read_rig(paths) -> RawRig:
                                "camera_info file")
     path = paths[0]
     text = _read(path)
-    if text.lstrip().startswith(("%YAML", "<?xml", "<opencv_storage")):
-        return _opencv(path)
-    data = _yaml(path, text)
+    data = _opencv_mapping(path) if _written_by_opencv(text) else _yaml(path, text)
+    if isinstance(data, dict) and data.keys() & set(STEREO_CALIBRATE_KEYS):
+        return _stereo_calibrate_rig(path, data)
     if isinstance(data, dict) and "cam0" in data and "cam1" in data:
         return _kalibr(path, data)
     if isinstance(data, dict) and "camera_matrix" in data:
-        raise CalibrationError(f"{path}: a ROS camera_info file describes one camera; give "
-                               "the left and the right one (--calib left.yaml --calib "
-                               "right.yaml)")
+        raise CalibrationError(ROS_HINT.format(path=path))
+    if _written_by_opencv(text):
+        return _stereo_calibrate_rig(path, data)  # names what is missing
     raise CalibrationError(f"{path}: not an OpenCV, ROS or Kalibr stereo calibration")
+
+
+ROS_HINT = ("{path}: a ROS camera_info file describes one camera; give the left and the "
+            "right one (--calib left.yaml --calib right.yaml)")
+
+
+#: Keys that make a file a cv2.stereoCalibrate rig (OpenCV FileStorage or plain YAML).
+STEREO_CALIBRATE_KEYS = ("K1", "M1", "cameraMatrix1")
+
+
+def _written_by_opencv(text: str) -> bool:
+    """An OpenCV FileStorage file: its YAML header (``%YAML:1.0``, or ``%YAML 1.2`` from
+    OpenCV 5, with ``!!opencv-matrix`` tags PyYAML does not read) or its XML."""
+    return text.lstrip().startswith(("%YAML", "<?xml", "<opencv_storage"))
+
+
+def _opencv_mapping(path: Path) -> dict:
+    """An OpenCV FileStorage file's top level as plain Python values; an OpenCV matrix
+    as ``{"rows", "cols", "data"}`` (as ROS writes its matrices)."""
+    try:
+        storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+        opened = storage.isOpened()
+    except (cv2.error, SystemError):
+        opened = False
+    if not opened:
+        raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file (malformed "
+                               "or truncated YAML/XML)")
+    try:
+        root = storage.root()
+        return {key: _plain(root.getNode(key)) for key in root.keys()}
+    except (cv2.error, SystemError):
+        raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file") from None
+    finally:
+        storage.release()
+
+
+def _plain(node, depth: int = 0):
+    """A FileStorage node as plain Python values (nested at most a few levels)."""
+    if depth > 8:
+        raise CalibrationError("a calibration nested deeper than any real one")
+    if node.isInt():
+        return int(node.real())
+    if node.isReal():
+        return node.real()
+    if node.isString():
+        return node.string()
+    if node.isSeq():
+        return [_plain(node.at(i), depth + 1) for i in range(node.size())]
+    if node.isMap():
+        if "dt" in node.keys():  # an !!opencv-matrix
+            matrix = np.asarray(node.mat(), dtype=np.float64)
+            return {"rows": matrix.shape[0], "cols": matrix.shape[1] if matrix.ndim > 1 else 1,
+                    "data": matrix.ravel().tolist()}
+        return {key: _plain(node.getNode(key), depth + 1) for key in node.keys()}
+    return None
 
 
 def _read(path: Path) -> str:
@@ -157,77 +214,64 @@ def _matrix(path: Path, key: str, value, shape: tuple[int, ...]) -> np.ndarray:
     return np.ascontiguousarray(array.reshape(shape))
 
 
-def _first_node(storage, path: Path, names: tuple[str, ...], required: bool = True):
+def _first_key(path: Path, data: dict, names: tuple[str, ...], required: bool = True
+               ) -> str | None:
     for name in names:
-        node = storage.getNode(name)
-        if not node.empty():
-            return name, node
+        if name in data:
+            return name
     if required:
         raise CalibrationError(f"{path}: missing {' / '.join(names)}")
-    return None, None
+    return None
 
 
-def _node_numbers(path: Path, name: str, node) -> np.ndarray:
-    """A FileStorage node's numbers: an OpenCV matrix, or a sequence of numbers."""
-    if node.isString() or node.isNone():
+def _numbers_of(path: Path, name: str, value) -> np.ndarray:
+    """The numbers of a matrix as a file gives it: an OpenCV or ROS matrix
+    (``{rows, cols, data}``), a list (of lists) or one number."""
+    if isinstance(value, dict):
+        value = value.get("data")
+    if value is None or isinstance(value, (str, bool)):
         raise CalibrationError(f"{path}: {name} is not a matrix of numbers")
-    if node.isSeq():
-        items = [node.at(i) for i in range(node.size())]
-        if not all(item.isReal() or item.isInt() for item in items):
-            raise CalibrationError(f"{path}: {name} is not a list of numbers")
-        values = np.array([item.real() for item in items], dtype=np.float64)
-    elif node.isReal() or node.isInt():
-        values = np.array([node.real()], dtype=np.float64)
-    else:
-        values = node.mat()
-        if values is None:
-            raise CalibrationError(f"{path}: {name} is not a matrix of numbers")
-    return np.asarray(values, dtype=np.float64).ravel()
+    try:
+        return np.asarray(value, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        raise CalibrationError(f"{path}: {name} is not a matrix of numbers") from None
 
 
 def _opencv(path: Path) -> RawRig:
-    """An OpenCV FileStorage file. OpenCV's parser reports a broken file as cv2.error or,
-    through its Python binding, as SystemError: both are this file's one-line error."""
-    try:
-        storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
-        opened = storage.isOpened()
-    except (cv2.error, SystemError):
-        opened = False
-    if not opened:
-        raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file (malformed "
-                               "or truncated YAML/XML)")
-    try:
-        values, found = {}, {}
-        for key, names, shape in (("K1", ("K1", "M1", "cameraMatrix1"), (3, 3)),
-                                  ("K2", ("K2", "M2", "cameraMatrix2"), (3, 3)),
-                                  ("R", ("R",), (3, 3)), ("T", ("T",), (3,))):
-            name, node = _first_node(storage, path, names)
-            values[key] = _matrix(path, name, _node_numbers(path, name, node), shape)
-            found[key] = name
-        for key, names in (("D1", ("D1", "distCoeffs1")), ("D2", ("D2", "distCoeffs2"))):
-            name, node = _first_node(storage, path, names, required=False)
-            found[key] = name or key
-            if node is None:
-                values[key] = np.zeros(5)
-            else:
-                numbers = _node_numbers(path, name, node)
-                values[key] = _matrix(path, name, numbers, (numbers.size,))
-        size = None
-        width, height = storage.getNode("image_width"), storage.getNode("image_height")
-        if not width.empty() and not height.empty():
-            size = (_whole_number(path, "image_width", _node_numbers(path, "image_width", width)),
-                    _whole_number(path, "image_height",
-                                  _node_numbers(path, "image_height", height)))
-        elif not storage.getNode("imageSize").empty():
-            numbers = _node_numbers(path, "imageSize", storage.getNode("imageSize"))
-            if numbers.size != 2:
-                raise CalibrationError(f"{path}: imageSize must be two numbers (width, "
-                                       f"height), has {numbers.size}")
-            size = tuple(_whole_number(path, "imageSize", [v]) for v in numbers)
-    except (cv2.error, SystemError):
-        raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file") from None
-    finally:
-        storage.release()
+    """An OpenCV FileStorage file (YAML or XML), as cv2.stereoCalibrate users save it."""
+    return _stereo_calibrate_rig(path, _opencv_mapping(path))
+
+
+def _stereo_calibrate_rig(path: Path, data: dict) -> RawRig:
+    """The rig of a mapping with cv2.stereoCalibrate's names (``K1``/``M1``/
+    ``cameraMatrix1``, ``D1``/``distCoeffs1``, the same for camera 2, ``R``, ``T``, and
+    ``image_width``/``image_height`` or ``imageSize``), from an OpenCV FileStorage file or
+    a plain YAML file."""
+    values, found = {}, {}
+    for key, names, shape in (("K1", ("K1", "M1", "cameraMatrix1"), (3, 3)),
+                              ("K2", ("K2", "M2", "cameraMatrix2"), (3, 3)),
+                              ("R", ("R",), (3, 3)), ("T", ("T",), (3,))):
+        name = _first_key(path, data, names)
+        values[key] = _matrix(path, name, _numbers_of(path, name, data[name]), shape)
+        found[key] = name
+    for key, names in (("D1", ("D1", "distCoeffs1")), ("D2", ("D2", "distCoeffs2"))):
+        name = _first_key(path, data, names, required=False)
+        found[key] = name or key
+        if name is None:
+            values[key] = np.zeros(5)
+        else:
+            numbers = _numbers_of(path, name, data[name])
+            values[key] = _matrix(path, name, numbers, (numbers.size,))
+    size = None
+    if "image_width" in data and "image_height" in data:
+        size = (_whole_number(path, "image_width", data["image_width"]),
+                _whole_number(path, "image_height", data["image_height"]))
+    elif "imageSize" in data:
+        numbers = _numbers_of(path, "imageSize", data["imageSize"])
+        if numbers.size != 2:
+            raise CalibrationError(f"{path}: imageSize must be two numbers (width, "
+                                   f"height), has {numbers.size}")
+        size = tuple(_whole_number(path, "imageSize", [v]) for v in numbers)
     return check_rig(path, RawRig(size=size, **values), found)
 
 
@@ -306,7 +350,8 @@ def check_rotation(path: Path, key: str, R: np.ndarray) -> None:
 def _ros_pair(left: Path, right: Path) -> RawRig:
     cams = []
     for path in (left, right):
-        data = _yaml(path, _read(path))
+        text = _read(path)
+        data = _opencv_mapping(path) if _written_by_opencv(text) else _yaml(path, text)
         if not isinstance(data, dict) or "camera_matrix" not in data:
             raise CalibrationError(f"{path}: not a ROS camera_info file (camera_matrix ...)")
         try:
@@ -335,6 +380,13 @@ def _ros_pair(left: Path, right: Path) -> RawRig:
                                f"from {left}'s {size[0]}x{size[1]}")
     if right_model != model:
         raise CalibrationError(f"{right}: distortion_model differs from {left}'s")
+    # Rectified views share one focal length and one row of the principal point.
+    left_p, right_p = l["projection_matrix"], r["projection_matrix"]
+    for (i, j), what in (((0, 0), "fx"), ((1, 1), "fy"), ((1, 2), "cy")):
+        if not math.isclose(left_p[i, j], right_p[i, j], rel_tol=1e-4, abs_tol=1e-3):
+            raise CalibrationError(
+                f"{right}: projection_matrix has {what} {right_p[i, j]:g}, {left}'s "
+                f"{left_p[i, j]:g}: rectified views share them (are the files of one rig?)")
     # The pose of the right camera from the rectifications: X2 = R2^T R1 X1 + T with the
     # baseline along the rectified x axis, Tx = -fx' B in P2.
     rotation = r["rectification_matrix"].T @ l["rectification_matrix"]

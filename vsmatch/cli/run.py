@@ -11,7 +11,7 @@ from .. import confidence, geometry, io, pipeline, preview, rig, search_range
 from ..confidence import DEFAULT_MIN_CONFIDENCE
 from ..config import load_config
 from .common import (ALPHA, CONFIDENCE_LEVEL, FINITE, MAX_DISP, POSITIVE, announce_compilation,
-                     check_outputs, check_png_range, config_option, echo, examples,
+                     check_outputs, check_png_range, config_option, echo, examples, given,
                      friendly_errors, max_memory_option, verbose, verbosity_options, with_budget)
 
 from .main import main
@@ -95,8 +95,8 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
         raise click.BadParameter(f"'{confidence_path}' must end in .pfm or .png",
                                  param_hint="'--confidence'")
     raw_rig = rig.read_rig(calib) if calib and rig.is_raw_rig(calib) else None
-    if rectified_dir is not None and raw_rig is None:
-        raise click.UsageError("--rectified needs a raw rig's --calib")
+    _refuse_idle_options(ctx, raw_rig is not None, bool(depth_path or cloud_path or calib),
+                         cloud_path is not None)
     outputs = [output, depth_path, cloud_path, preview_path, confidence_path]
     check_outputs([left, right, *calib], outputs, folders=rectified_outputs(rectified_dir))
     camera = None if raw_rig else _calibration(calib, focal, baseline, cx, cy, doffs)
@@ -120,8 +120,9 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
                      f"baseline {camera.baseline:g}")
         if depth_path or cloud_path:
             _check_depth_fits(camera, calib)
-    elif camera is not None and calib:
-        _check_calibration_size(camera, calib[0], left_image.shape)
+    elif camera is not None:
+        _check_calibration_size(camera, calib[0] if calib else "--cx/--cy/--doffs",
+                                left_image.shape)
     width = left_image.shape[1]
     try:
         pipeline.check_views(left_image, right_image, cfg)
@@ -205,6 +206,26 @@ def rectified_outputs(folder) -> dict[Path, list[Path]]:
 
 
 RECTIFIED_FILES = ("im0.png", "im1.png", "calib.txt")
+
+
+def _refuse_idle_options(ctx, raw_rig: bool, metric: bool, cloud: bool) -> None:
+    """Options that would do nothing here are refused, not ignored (``metric``: depth or
+    a cloud is asked for, or a calibration file given, beside which values by hand are
+    refused on their own)."""
+    if not raw_rig:
+        for name in ("rectified_dir", "alpha"):
+            if given(ctx, name):
+                option = "--rectified" if name == "rectified_dir" else "--alpha"
+                raise click.UsageError(f"{option} is for a raw rig's --calib (its views are "
+                                       "rectified here)")
+    if not metric:
+        hand = [f"--{n}" for n in ("focal", "baseline", "cx", "cy", "doffs")
+                if ctx.params.get(n) is not None]
+        if hand:
+            raise click.UsageError(f"{', '.join(hand)} give the camera for --depth and "
+                                   "--cloud, and neither is asked for")
+    if not cloud and ctx.params.get("max_depth") is not None:
+        raise click.UsageError("--max-depth limits the --cloud, which is not asked for")
 
 
 def _check_output_path(path: Path) -> None:
