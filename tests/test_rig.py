@@ -230,3 +230,98 @@ def test_rectify_command_refuses_a_rig_for_another_image_size(tmp_path, rng):
                     tmp_path / "stereo.yaml", "--to", tmp_path / "out")
     assert result.exit_code == 1 and "64x48" in result.output and "60x40" in result.output
     assert not (tmp_path / "out").exists()
+
+
+# --- files as other tools write them ----------------------------------------------------------
+
+def opencv_ros_file(path, K, projection, width=160, height=96, matrix_tags=True):
+    """A ROS camera_info file as OpenCV's FileStorage writes it (rtabmap, OpenCV tools):
+    an OpenCV YAML header, matrices as !!opencv-matrix or as plain rows/cols/data maps."""
+    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
+    fs.write("image_width", width)
+    fs.write("image_height", height)
+    fs.write("distortion_model", "plumb_bob")
+    for key, value in (("camera_matrix", K), ("distortion_coefficients", np.zeros((1, 5))),
+                       ("rectification_matrix", np.eye(3)), ("projection_matrix", projection)):
+        value = np.asarray(value, dtype=np.float64)
+        if matrix_tags:
+            fs.write(key, value)
+            continue
+        fs.startWriteStruct(key, cv2.FileNode_MAP)
+        fs.write("rows", value.shape[0])
+        fs.write("cols", value.shape[1])
+        fs.startWriteStruct("data", cv2.FileNode_SEQ | cv2.FileNode_FLOW)
+        for number in value.ravel():
+            fs.write("", float(number))
+        fs.endWriteStruct()
+        fs.endWriteStruct()
+    fs.release()
+    return path
+
+
+K_SMALL = np.array([[300.0, 0, 80], [0, 300, 48], [0, 0, 1]])
+
+
+def projections(right_focal=300.0):
+    left = np.array([[300.0, 0, 80, 0], [0, 300, 48, 0], [0, 0, 1, 0]])
+    right = np.array([[right_focal, 0, 80, -right_focal * 0.06], [0, 300, 48, 0],
+                      [0, 0, 1, 0]])
+    return left, right
+
+
+@pytest.mark.parametrize("matrix_tags", [True, False])
+def test_opencv_written_ros_files_are_read(tmp_path, matrix_tags):
+    p1, p2 = projections()
+    paths = [opencv_ros_file(tmp_path / f"{side}.yaml", K_SMALL, p, matrix_tags=matrix_tags)
+             for side, p in (("left", p1), ("right", p2))]
+    raw = rig.read_rig(paths)
+    assert raw.size == (160, 96) and np.allclose(raw.T, [-0.06, 0, 0])
+    calib = rig.Rectifier(raw, (160, 96)).calibration()
+    assert calib.focal == pytest.approx(300) and calib.baseline == pytest.approx(0.06)
+    with pytest.raises(CalibrationError, match="ROS camera_info file describes one camera"):
+        rig.read_rig(paths[:1])
+
+
+def test_a_ros_pair_of_two_focal_lengths_is_refused(tmp_path):
+    p1, p2 = projections(right_focal=330.0)
+    paths = [opencv_ros_file(tmp_path / f"{side}.yaml", K_SMALL, p)
+             for side, p in (("left", p1), ("right", p2))]
+    with pytest.raises(CalibrationError, match="projection_matrix has fx 330"):
+        rig.read_rig(paths)
+
+
+def test_a_plain_yaml_stereo_calibrate_rig_is_read(tmp_path):
+    path = tmp_path / "rig.yaml"
+    path.write_text("K1: [[300, 0, 80], [0, 300, 48], [0, 0, 1]]\nD1: [0, 0, 0, 0, 0]\n"
+                    "K2: [[300, 0, 80], [0, 300, 48], [0, 0, 1]]\nD2: [0, 0, 0, 0, 0]\n"
+                    "R: [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\nT: [-0.06, 0, 0]\n"
+                    "image_width: 160\nimage_height: 96\n")
+    assert rig.is_raw_rig([path])
+    raw = rig.read_rig([path])
+    assert raw.size == (160, 96) and np.allclose(raw.T, [-0.06, 0, 0])
+
+
+@pytest.mark.parametrize("cam0, message", [
+    ("  intrinsics: [300, 300, 80]\n  distortion_coeffs: [0, 0, 0, 0]\n"
+     "  resolution: [160, 96]\n", "cam0.intrinsics must be four numbers"),
+    ("  intrinsics:\n  distortion_coeffs: [0, 0, 0, 0]\n  resolution: [160, 96]\n",
+     "cam0.intrinsics is not a matrix of numbers"),
+    ("  distortion_coeffs: [0, 0, 0, 0]\n  resolution: [160, 96]\n",
+     "cam0 lacks intrinsics"),
+    (" ~\n", "cam0 must be a mapping"),
+])
+def test_kalibr_problems_are_named(tmp_path, cam0, message):
+    cam1 = ("  intrinsics: [300, 300, 80, 48]\n  distortion_coeffs: [0, 0, 0, 0]\n"
+            "  resolution: [160, 96]\n  T_cn_cnm1: [[1, 0, 0, -0.06], [0, 1, 0, 0], "
+            "[0, 0, 1, 0], [0, 0, 0, 1]]\n")
+    path = tmp_path / "camchain.yaml"
+    path.write_text("cam0:\n" + cam0 + "cam1:\n" + cam1)
+    with pytest.raises(CalibrationError, match=message):
+        rig.read_rig([path])
+
+
+def test_a_calib_txt_with_a_byte_order_mark_is_read(tmp_path):
+    path = tmp_path / "calib.txt"
+    path.write_bytes("\ufeffcam0=[500 0 20; 0 500 15; 0 0 1]\ndoffs=0\nbaseline=100\n"
+                     .encode("utf-8"))
+    assert geometry.read_calibration(path).focal == 500

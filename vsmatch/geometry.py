@@ -125,7 +125,7 @@ def read_calibration(path: str | Path) -> Calibration:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a BOM (Windows editors) dropped
     except FileNotFoundError:
         raise CalibrationError(f"{path}: file not found") from None
     except (OSError, UnicodeDecodeError) as exc:

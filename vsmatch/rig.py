@@ -150,7 +150,7 @@ def _read(path: Path) -> str:
     try:
         if path.stat().st_size > MAX_CALIBRATION_BYTES:
             raise CalibrationError(f"{path}: larger than any calibration file")
-        return path.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise CalibrationError(f"{path}: file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -418,13 +418,20 @@ def _kalibr(path: Path, data: dict) -> RawRig:
     cams = []
     for name in ("cam0", "cam1"):
         cam = data[name]
-        try:
-            fu, fv, pu, pv = (float(v) for v in cam["intrinsics"])
-            coeffs = [float(v) for v in cam["distortion_coeffs"]]
-            model = cam.get("distortion_model", "radtan")
-            resolution = cam["resolution"]
-        except (KeyError, TypeError, ValueError) as exc:
-            raise CalibrationError(f"{path}: {name} lacks a valid {exc}") from None
+        if not isinstance(cam, dict):
+            raise CalibrationError(f"{path}: {name} must be a mapping (camera_model, "
+                                   "intrinsics, distortion_coeffs, resolution, ...)")
+        for key in ("intrinsics", "distortion_coeffs", "resolution"):
+            if key not in cam:
+                raise CalibrationError(f"{path}: {name} lacks {key}")
+        intrinsics = _numbers_of(path, f"{name}.intrinsics", cam["intrinsics"])
+        if intrinsics.size != 4:
+            raise CalibrationError(f"{path}: {name}.intrinsics must be four numbers [fu, fv, "
+                                   f"pu, pv], has {intrinsics.size}")
+        fu, fv, pu, pv = (float(v) for v in intrinsics)
+        coeffs = list(_numbers_of(path, f"{name}.distortion_coeffs", cam["distortion_coeffs"]))
+        model = cam.get("distortion_model", "radtan")
+        resolution = cam["resolution"]
         if not isinstance(resolution, list) or len(resolution) != 2:
             raise CalibrationError(f"{path}: {name}.resolution must be [width, height], "
                                    f"got {resolution}")
@@ -438,10 +445,10 @@ def _kalibr(path: Path, data: dict) -> RawRig:
         K = _matrix(path, f"{name}.intrinsics", [[fu, 0, pu], [0, fv, pv], [0, 0, 1]], (3, 3))
         D = _matrix(path, f"{name}.distortion_coeffs", coeffs, (len(coeffs),))
         cams.append((K, D, model, size))
-    try:
-        pose = _matrix(path, "cam1.T_cn_cnm1", data["cam1"]["T_cn_cnm1"], (4, 4))
-    except KeyError:
-        raise CalibrationError(f"{path}: cam1 lacks T_cn_cnm1") from None
+    if "T_cn_cnm1" not in data["cam1"]:
+        raise CalibrationError(f"{path}: cam1 lacks T_cn_cnm1")
+    pose = _matrix(path, "cam1.T_cn_cnm1",
+                   _numbers_of(path, "cam1.T_cn_cnm1", data["cam1"]["T_cn_cnm1"]), (4, 4))
     (K1, D1, model, size), (K2, D2, model2, size2) = cams
     if model2 != model:
         raise CalibrationError(f"{path}: cam1's distortion_model {model2} differs from "
