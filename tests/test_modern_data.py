@@ -193,3 +193,57 @@ def test_kitti_d1_agrees_with_the_devkit_rule(data_dir):
     # PNG output rounds to 1/256 px, so allow a few pixels' difference.
     assert report["methods"]["sgbm"]["scenes"]["000046"]["all"] == pytest.approx(
         expected, abs=0.05)
+
+
+@pytest.mark.parametrize("value", ["nan", "-1", "0", "inf"])
+def test_a_threshold_that_is_no_distance_is_refused(tmp_path, value):
+    result = CliRunner().invoke(main, ["eval", "--dataset", "middlebury2", "--threshold",
+                                       value, "--data-root", str(tmp_path)])
+    assert result.exit_code == 2 and "--threshold" in result.output, result.output
+
+
+def eth3d_copy(data_dir, tmp_path, scene="electro_1s"):
+    """One ETH3D scene copied into a data root of its own, to be broken."""
+    import shutil
+
+    root = tmp_path / "data"
+    shutil.copytree(data_dir / "eth3d-dev" / scene, root / "eth3d-dev" / scene)
+    return root, root / "eth3d-dev" / scene
+
+
+def eval_eth3d(root):
+    return CliRunner().invoke(main, ["eval", "--dataset", "eth3d", "--method", "census",
+                                     "--data-root", str(root)])
+
+
+@pytest.mark.data
+@pytest.mark.parametrize("breakage, message", [
+    ("no im1", "im1.png: file not found"),
+    ("small gt", "disp0GT.pfm 717x425"),
+    ("negative pfm", "not a PFM file"),
+    ("small right", "the views differ in size"),
+    ("no truth", "has ground truth"),
+])
+def test_a_broken_eth3d_scene_names_itself(data_dir, tmp_path, breakage, message):
+    """A scene that cannot be scored is an error naming the scene's folder and what is
+    wrong (not numpy's words, not skipped, not a nan average)."""
+    from vsmatch import io
+
+    root, scene = eth3d_copy(data_dir, tmp_path)
+    gt = io.read_pfm(scene / "disp0GT.pfm")
+    if breakage == "no im1":
+        (scene / "im1.png").unlink()
+    elif breakage == "small gt":
+        cv2.imwrite(str(scene / "disp0GT.pfm"), np.ascontiguousarray(gt[10:]))
+    elif breakage == "negative pfm":
+        data = (scene / "disp0GT.pfm").read_bytes().split(b"\n", 2)
+        (scene / "disp0GT.pfm").write_bytes(b"Pf\n" + b"-1 -1\n" + data[2])
+    elif breakage == "small right":
+        right = cv2.imread(str(scene / "im1.png"))
+        cv2.imwrite(str(scene / "im1.png"), right[10:])
+    else:
+        cv2.imwrite(str(scene / "disp0GT.pfm"), np.full_like(gt, np.inf))
+    result = eval_eth3d(root)
+    assert result.exit_code == 1, result.output
+    lines = [line for line in result.output.splitlines() if line.strip()]
+    assert len(lines) == 1 and message in lines[0] and "electro_1s" in lines[0], result.output

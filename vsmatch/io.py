@@ -561,6 +561,8 @@ def read_pfm(path: str | Path) -> np.ndarray:
         if kind not in (b"Pf", b"PF") or len(dims) != 2:
             raise ValueError("bad header")
         width, height = int(dims[0]), int(dims[1])
+        if width < 1 or height < 1:
+            raise ValueError("bad size")
     except FileNotFoundError:
         raise ImageError(f"{path}: file not found") from None
     except (OSError, ValueError, IndexError):

@@ -10,7 +10,7 @@ import click
 from .. import datasets, evaluation, io
 from ..config import load_config
 from ..peers import PEER_METHODS
-from .common import (check_outputs, check_outside, data_root_option, echo, examples,
+from .common import (POSITIVE, check_outputs, check_outside, data_root_option, echo, examples,
                      friendly_errors, verbose, verbosity_options)
 
 from .main import main
@@ -34,7 +34,7 @@ from .main import main
 @click.option("--figure", "figure_path", type=click.Path(dir_okay=False), default=None,
               help="Write a picture of the results here (.png): a row per scene; the "
                    "left view, the ground truth, and each method's disparity and errors.")
-@click.option("--threshold", type=float, default=None,
+@click.option("--threshold", type=POSITIVE, default=None,
               help="Middlebury: a pixel is bad when its error exceeds this many pixels "
                    "(default 1.0, and 2.0 for Middlebury 2014). KITTI's D1 is fixed.")
 @click.option("--max-disp", "range_mode", type=click.Choice(["official", "auto"]),

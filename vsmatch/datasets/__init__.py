@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from . import eth3d, kitti, middlebury2, middlebury2014, middlebury_third
-from .base import DatasetError, Scene
+from .base import DatasetError, Scene, scene_problem
 
 __all__ = ["DATASETS", "Dataset", "DatasetError", "Scene", "dataset_folder", "load_dataset",
            "resolve_data_root"]
@@ -83,7 +83,12 @@ def dataset_folder(dataset: str, data_root: str | Path | None = None) -> Path:
 
 def load_dataset(dataset: str, data_root: str | Path | None = None, names=None) -> list[Scene]:
     """The scenes of ``dataset`` (all, or those in ``names``)."""
-    scenes = DATASETS[dataset].load(dataset_folder(dataset, data_root), names)
+    folder = dataset_folder(dataset, data_root)
+    scenes = DATASETS[dataset].load(folder, names)
+    for scene in scenes:
+        problem = scene_problem(scene)
+        if problem is not None:
+            raise DatasetError(f"{folder / scene.name}: {problem}")
     if not scenes:
         raise DatasetError(f"dataset '{dataset}': no scenes in "
                            f"{dataset_folder(dataset, data_root)}")

@@ -30,6 +30,36 @@ class Scene:
     calib: Any = None  # a geometry.Calibration where the dataset gives one
 
 
+def scene_problem(scene: Scene) -> str | None:
+    """Why a scene as read cannot be scored (views, ground truth and masks of different
+    sizes, no pixel with ground truth), or None."""
+    height, width = scene.left.shape[:2]
+    if scene.right.shape != scene.left.shape:
+        return (f"the views differ in size: {width}x{height} and "
+                f"{scene.right.shape[1]}x{scene.right.shape[0]}")
+    arrays = {"the ground truth": scene.ground_truth, **{
+        f"the {name} mask": mask for name, mask in scene.masks.items()}}
+    for what, array in arrays.items():
+        if array.shape[:2] != (height, width):
+            return (f"{what} is {array.shape[1]}x{array.shape[0]}, the views "
+                    f"{width}x{height}")
+    for name, mask in scene.masks.items():
+        if not mask.any():
+            return f"no pixel of the {name} mask has ground truth"
+    return None
+
+
+def midd_eval3_masks(folder: Path, gt: np.ndarray, nocc: np.ndarray
+                     ) -> dict[str, np.ndarray]:
+    """MiddEval3's masks of a scene: "nonocc" (known and ``mask0nocc == 255``) and "all"
+    (known); a mask of another size than the ground truth is an error naming both."""
+    if nocc.shape != gt.shape:
+        raise DatasetError(f"{folder}: mask0nocc.png is {nocc.shape[1]}x{nocc.shape[0]}, "
+                           f"disp0GT.pfm {gt.shape[1]}x{gt.shape[0]}")
+    known = gt > 0
+    return {"nonocc": known & (nocc == 255), "all": known}
+
+
 def read_grey(path: Path) -> np.ndarray:
     """An 8-bit single-channel image (masks, 8-bit ground truth)."""
     return _read(path, cv2.IMREAD_GRAYSCALE)

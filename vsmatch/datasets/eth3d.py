@@ -13,7 +13,7 @@ from pathlib import Path
 
 from ..geometry import read_calibration
 from ..io import read_image
-from .base import Scene, check_names, read_grey, read_pfm_disparity
+from .base import Scene, check_names, midd_eval3_masks, read_grey, read_pfm_disparity
 from .middlebury2014 import scene_names
 
 #: The range searched, as a multiple of the largest ground-truth disparity.
@@ -25,9 +25,7 @@ def load(folder: Path, names=None) -> list[Scene]:
     for name in check_names(scene_names(folder), names, folder):
         d = folder / name
         gt = read_pfm_disparity(d / "disp0GT.pfm")
-        mask = read_grey(d / "mask0nocc.png")
-        known = gt > 0
-        masks = {"nonocc": known & (mask == 255), "all": known}
+        masks = midd_eval3_masks(d, gt, read_grey(d / "mask0nocc.png"))
         left = read_image(d / "im0.png")
         max_disp = min(math.ceil(RANGE_MARGIN * float(gt.max())), left.shape[1] - 1)
         scenes.append(Scene(name, left, read_image(d / "im1.png"), gt, masks,

@@ -11,16 +11,18 @@ from pathlib import Path
 
 from ..geometry import read_calibration
 from ..io import read_image
-from .base import DatasetError, Scene, check_names, read_grey, read_pfm_disparity
+from .base import (DatasetError, Scene, check_names, midd_eval3_masks, read_grey,
+                   read_pfm_disparity)
 
 #: The files a training scene must have (the ground truth comes from a second archive).
 SCENE_FILES = ("im0.png", "im1.png", "calib.txt", "disp0GT.pfm", "mask0nocc.png")
 
 
 def scene_names(folder: Path) -> list[str]:
-    """The sub-folders that hold a pair (``im0.png``, ``im1.png``), sorted."""
+    """The sub-folders that hold a view (``im0.png`` or ``im1.png``), sorted: one that
+    lacks the other is an error when it is read, never skipped."""
     return sorted(p.name for p in folder.iterdir()
-                  if (p / "im0.png").is_file() and (p / "im1.png").is_file())
+                  if (p / "im0.png").is_file() or (p / "im1.png").is_file())
 
 
 def load(folder: Path, names=None) -> list[Scene]:
@@ -31,9 +33,7 @@ def load(folder: Path, names=None) -> list[Scene]:
         if calib.ndisp is None:
             raise DatasetError(f"{d / 'calib.txt'}: no ndisp")
         gt = read_pfm_disparity(d / "disp0GT.pfm")
-        mask = read_grey(d / "mask0nocc.png")
-        known = gt > 0
-        masks = {"nonocc": known & (mask == 255), "all": known}
+        masks = midd_eval3_masks(d, gt, read_grey(d / "mask0nocc.png"))
         scenes.append(Scene(name, read_image(d / "im0.png"), read_image(d / "im1.png"),
                             gt, masks, calib.ndisp - 1, calib=calib))
     return scenes
