@@ -164,3 +164,138 @@ def test_an_unexpected_task_error_fails_that_item_only(distributed, how):
         results = dict(executor.map_unordered(fails_on_three, range(5)))
     assert results[2] == 20 and results[4] == 40
     assert "RuntimeError" in results[3] and "no three" in results[3]
+
+
+# --- clusters that hang or die: bounded waits, one line ---------------------------------------
+
+def free_port():
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_a_scheduler_that_never_answers_is_given_up(distributed, tmp_path):
+    """A port that accepts and never answers held Dask's client forever."""
+    import socket
+    import threading
+
+    import dask
+
+    src = write_recording(tmp_path / "drive", 1, size=(40, 60))
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(8)
+    held = []
+    threading.Thread(target=lambda: held.extend(server.accept() for _ in range(4)),
+                     daemon=True).start()
+    start = time.monotonic()
+    try:
+        with dask.config.set({"distributed.comm.timeouts.connect": "2s"}):
+            result = invoke("batch", src, "-o", tmp_path / "out", "--max-disp", 8,
+                            "--scheduler", f"tcp://127.0.0.1:{server.getsockname()[1]}")
+    finally:
+        server.close()
+    assert time.monotonic() - start < 30
+    assert result.exit_code == 1, result.output
+    lines = [line for line in result.output.strip().splitlines() if line.strip()]
+    assert len(lines) == 1 and "cannot reach the Dask scheduler" in lines[0], result.output
+
+
+def test_a_scheduler_without_workers_is_one_line(distributed, tmp_path):
+    import dask
+
+    src = write_recording(tmp_path / "drive", 1, size=(40, 60))
+    with distributed.LocalCluster(n_workers=0, dashboard_address=":0") as cluster, \
+            dask.config.set({"distributed.comm.timeouts.connect": "2s"}):
+        result = invoke("batch", src, "-o", tmp_path / "out", "--max-disp", 8,
+                        "--scheduler", cluster.scheduler_address)
+    assert result.exit_code == 1, result.output
+    lines = [line for line in result.output.strip().splitlines() if line.strip()]
+    assert len(lines) == 1 and "has no worker" in lines[0], result.output
+
+
+def start_worker(address):
+    return subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address,
+                             "--no-nanny", "--nthreads", "1", "--no-dashboard"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def test_the_only_worker_dying_ends_the_batch_in_one_line(distributed, tmp_path):
+    """No worker left (and none restarting it): the batch stops after the patience,
+    with the outputs written so far whole, instead of waiting forever."""
+    import dask
+
+    src = write_recording(tmp_path / "drive", 8, size=(240, 360))
+    out = tmp_path / "dask"
+    with distributed.LocalCluster(n_workers=0, dashboard_address=":0") as cluster, \
+            dask.config.set({"distributed.comm.timeouts.connect": "5s"}):
+        worker = start_worker(cluster.scheduler_address)
+        try:
+            proc = subprocess.Popen(
+                [sys.executable, "-m", "vsmatch", "batch", str(src), "-o", str(out),
+                 "--max-disp", "40", "--scheduler", cluster.scheduler_address],
+                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                env={**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "5s"})
+            deadline = time.monotonic() + 120
+            while not (out.is_dir() and any(out.glob("*.pfm"))) and \
+                    time.monotonic() < deadline:
+                time.sleep(0.05)
+            worker.kill()
+            stdout, stderr = proc.communicate(timeout=120)
+        finally:
+            worker.kill()
+    assert proc.returncode == 1, stderr
+    lines = [line for line in stderr.splitlines() if line.strip() and "pair/s" not in line]
+    assert len(lines) == 1 and "no worker" in lines[0], stderr
+    written = sorted(out.glob("*.pfm"))
+    assert 1 <= len(written) < 8
+    for path in written:
+        assert np.isfinite(io.read_pfm(path)).any()
+    assert not [p for p in out.iterdir() if ".tmp" in p.name]
+
+
+def test_a_killed_scheduler_is_one_line_without_dasks_traceback(distributed, tmp_path):
+    src = write_recording(tmp_path / "drive", 8, size=(240, 360))
+    out = tmp_path / "dask"
+    port = free_port()
+    scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler",
+                                  "--host", "127.0.0.1", "--port", str(port),
+                                  "--no-dashboard"],
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    address = f"tcp://127.0.0.1:{port}"
+    worker = None
+    try:
+        time.sleep(2)
+        worker = start_worker(address)
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "vsmatch", "batch", str(src), "-o", str(out),
+             "--max-disp", "40", "--scheduler", address],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            env={**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "5s"})
+        deadline = time.monotonic() + 120
+        while not (out.is_dir() and any(out.glob("*.pfm"))) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        scheduler.kill()
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        scheduler.kill()
+        if worker is not None:
+            worker.kill()
+    assert proc.returncode == 1, stderr
+    lines = [line for line in stderr.splitlines() if line.strip() and "pair/s" not in line]
+    assert len(lines) == 1 and "Dask" in lines[0], stderr
+    assert "Traceback" not in stderr
+
+
+@pytest.mark.parametrize("value, message", [
+    ("ucx://127.0.0.1:8786", "ucx:// is not supported"),
+    ("tcp://127.0.0.1:99999", "not in 1..65535"),
+])
+def test_addresses_this_machine_cannot_use_are_refused_at_once(tmp_path, value, message):
+    src = write_recording(tmp_path / "drive", 1, size=(40, 60))
+    start = time.monotonic()
+    result = invoke("batch", src, "-o", tmp_path / "out", "--scheduler", value)
+    assert result.exit_code == 2 and message in result.output, result.output
+    assert time.monotonic() - start < 5
