@@ -197,3 +197,32 @@ def test_ablation_refuses_several_methods(tmp_path):
     result = invoke("eval", "--ablation", "--method", "paper", "--method", "census",
                     "--data-root", tmp_path)
     assert result.exit_code == 2 and "at most one" in result.output
+
+
+@pytest.mark.parametrize("where", ["left", "output", "batch", "video"])
+def test_a_symbolic_link_that_loops_is_one_line(tmp_path, monkeypatch, rng, where):
+    from conftest import random_pair
+    import cv2
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "loop").symlink_to("loop")
+    left, right = random_pair(rng, height=32, width=48, shift=3)
+    cv2.imwrite("l.png", left)
+    cv2.imwrite("r.png", right)
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "d.pfm").symlink_to("../loop")
+    args = {"left": ["run", "loop", "r.png", "-o", "d.pfm", "--max-disp", "8"],
+            "output": ["run", "l.png", "r.png", "-o", "out/d.pfm", "--max-disp", "8"],
+            "batch": ["batch", "pairs.csv"],
+            "video": ["video", "loop", "-o", "v.avi", "--side-by-side"]}[where]
+    (tmp_path / "pairs.csv").write_text("loop,r.png,o.pfm,8\n")
+    result = invoke(*args)
+    assert result.exit_code == 1, result.output
+    assert "symbolic link that loops" in result.output and "unexpected" not in result.output
+    assert len(result.output.strip().splitlines()) == 1, result.output
+
+
+def test_a_camera_index_past_what_opencv_takes_is_one_line(tmp_path):
+    result = invoke("video", "99999999999999999999", "1", "-o", tmp_path / "v.avi")
+    assert result.exit_code == 1 and "no camera has this index" in result.output
+    assert "Overload" not in result.output

@@ -61,3 +61,67 @@ def test_rectify_on_a_full_disk_leaves_no_folder(small_disk, tmp_path):
     result = invoke("rectify", left, right, "--calib", calib, "--to", small_disk / "rect")
     assert result.exit_code == 1 and "could not be written" in result.output, result.output
     assert list(small_disk.iterdir()) == []
+
+
+@pytest.mark.data
+def test_eval_on_a_full_disk_leaves_no_folder(small_disk, data_dir):
+    result = invoke("-q", "eval", "--dataset", "middlebury2", "--data-root", data_dir, "--method",
+                    "census", "--out-dir", small_disk / "runs")
+    assert result.exit_code == 1 and "could not be written" in result.output, result.output
+    assert len(result.output.strip().splitlines()) == 1, result.output
+    assert list(small_disk.iterdir()) == []
+
+
+SIGTERM_AFTER_FIRST_SCENE = """
+import os, signal, sys
+from vsmatch import evaluation
+real = evaluation.save_scene_outputs
+def save(*args, **kwargs):
+    real(*args, **kwargs)
+    os.kill(os.getpid(), signal.SIGTERM)  # after the first scene's files are in place
+evaluation.save_scene_outputs = save
+from vsmatch.cli import main
+main(sys.argv[1:])
+"""
+
+
+@pytest.mark.data
+def test_sigterm_during_eval_says_what_the_out_dir_holds(tmp_path, data_dir):
+    import sys
+
+    proc = subprocess.run([sys.executable, "-c", SIGTERM_AFTER_FIRST_SCENE, "eval",
+                           "--dataset", "middlebury2", "--data-root", str(data_dir),
+                           "--method", "census", "--out-dir", str(tmp_path / "runs")],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 143, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if line.strip() and "run/s" not in line
+             and "|" not in line]
+    assert len(lines) == 1 and "only the runs that finished" in lines[0], proc.stderr
+    written = [p.name for p in (tmp_path / "runs" / "census").iterdir()
+               if p.suffix == ".pfm" and "_confidence" not in p.name]
+    assert len(written) == 1, written  # the first scene's, whole
+
+
+def test_ctrl_c_while_the_command_loads_is_one_line(tmp_path):
+    """Numba and OpenCV take a moment to load: Ctrl-C then printed Python's traceback."""
+    import signal
+    import sys
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-m", "vsmatch", "run", "l.png", "r.png", "-o",
+                             str(tmp_path / "d.pfm")], stderr=subprocess.PIPE, text=True)
+    time.sleep(0.15)
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "Traceback" not in stderr and stderr.strip().splitlines() == [
+        "vsmatch: interrupted"], stderr
+
+
+def test_loading_the_command_does_not_load_numba_or_opencv():
+    import sys
+
+    code = ("import sys, vsmatch.cli.console, vsmatch; "
+            "print('numba' in sys.modules or 'cv2' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.stdout.strip() == "False", out.stderr

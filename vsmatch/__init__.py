@@ -1,17 +1,38 @@
 """vsmatch: dense stereo matching guided by visual sensitive information.
 
 Wang, Pathan and Dev, "Stereo Matching Based on Visual Sensitive Information", ICIVC 2021.
+
+The names below are imported when first used, so that ``import vsmatch`` (and the
+``vsmatch`` command's start, where Ctrl-C must stay one line) does not load Numba and
+OpenCV before they are needed.
 """
 
-from .config import Config, ConfigError, load_config
-from .disparity import INVALID_DISPARITY
-from .geometry import Calibration, depth_from_disparity, point_cloud, read_calibration
-from .matcher import StereoMatcher
-from .pipeline import MatchResult, match, run
-from .search_range import estimate_disparity_range
+from __future__ import annotations
+
+import importlib
 
 __version__ = "0.5.0"
 
-__all__ = ["Calibration", "Config", "ConfigError", "INVALID_DISPARITY", "MatchResult",
-           "StereoMatcher", "__version__", "depth_from_disparity", "estimate_disparity_range",
-           "load_config", "match", "point_cloud", "read_calibration", "run"]
+#: Each public name and the module that defines it.
+_EXPORTS = {
+    "Calibration": "geometry", "Config": "config", "ConfigError": "config",
+    "INVALID_DISPARITY": "disparity", "MatchResult": "pipeline", "StereoMatcher": "matcher",
+    "depth_from_disparity": "geometry", "estimate_disparity_range": "search_range",
+    "load_config": "config", "match": "pipeline", "point_cloud": "geometry",
+    "read_calibration": "geometry", "run": "pipeline",
+}
+
+__all__ = sorted([*_EXPORTS, "__version__"])
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'vsmatch' has no attribute '{name}'")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value  # found directly from now on
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS})

@@ -1,5 +1,5 @@
 """``python -m vsmatch``: the same as the ``vsmatch`` command."""
 
-from .cli import main
+from .cli.console import main
 
 main()

@@ -70,18 +70,18 @@ def check_plan(jobs: list[PairJob], *, with_confidence: bool = False,
     in the rows: each path is looked up by its resolved name and by its file on disk."""
     inputs: dict[object, tuple[PairJob | None, Path]] = {}
     for path in sources:
-        for key in (Path(path).resolve(), _file_key(Path(path))):
+        for key in (io.resolved(path), _file_key(Path(path))):
             if key is not None:
                 inputs.setdefault(key, (None, Path(path)))
     for job in jobs:
         for path in (job.left, job.right):
-            for key in (path.resolve(), _file_key(path)):
+            for key in (io.resolved(path), _file_key(path)):
                 if key is not None:
                     inputs.setdefault(key, (job, path))
     outputs: dict[object, PairJob] = {}
     for job in jobs:
         for output in job_outputs(job, with_confidence):
-            keys = [k for k in (output.resolve(), _file_key(output)) if k is not None]
+            keys = [k for k in (io.resolved(output), _file_key(output)) if k is not None]
             for key in keys:
                 if key in inputs:
                     other, path = inputs[key]

@@ -20,8 +20,8 @@ import yaml
 from . import metrics, volumes
 from .config import Config, config_from_dict, load_config
 from .datasets import DATASETS, Scene
-from .io import (colour_disparity, error_image, imwrite_atomic, write_confidence,
-                 write_disparity, write_text_atomic)
+from .io import (all_or_none, colour_disparity, error_image, imwrite_atomic, output_folder,
+                 write_confidence, write_disparity, write_text_atomic)
 from .peers import PEER_METHODS, sgbm_disparity
 from .pipeline import run
 
@@ -212,15 +212,16 @@ def _safe_name(name: str) -> str:
 def save_scene_outputs(folder: Path, scene: Scene, disp: np.ndarray,
                        scoring: Scoring, conf: np.ndarray | None = None) -> None:
     """Disparity (PFM), colour-mapped disparity and error image of one scene, and its
-    confidence (PFM) when there is one."""
-    folder.mkdir(parents=True, exist_ok=True)
-    write_disparity(folder / f"{scene.name}.pfm", disp)
-    if conf is not None:
-        write_confidence(folder / f"{scene.name}_confidence.pfm", conf)
-    imwrite_atomic(folder / f"{scene.name}_disp.png", colour_disparity(disp, scene.max_disp))
-    imwrite_atomic(folder / f"{scene.name}_error.png",
-                   error_image(disp, scoring.bad_map(disp, scene.ground_truth),
-                               headline_mask(scene), scene.max_disp))
+    confidence (PFM) when there is one: all of them or none."""
+    with output_folder(folder), all_or_none():
+        write_disparity(folder / f"{scene.name}.pfm", disp)
+        if conf is not None:
+            write_confidence(folder / f"{scene.name}_confidence.pfm", conf)
+        imwrite_atomic(folder / f"{scene.name}_disp.png",
+                       colour_disparity(disp, scene.max_disp))
+        imwrite_atomic(folder / f"{scene.name}_error.png",
+                       error_image(disp, scoring.bad_map(disp, scene.ground_truth),
+                                   headline_mask(scene), scene.max_disp))
 
 
 def headline_mask(scene: Scene) -> np.ndarray:

@@ -253,7 +253,7 @@ def check_replaceable_folder(path: str | Path, *, overwrite: bool,
         raise OSError(f"{path}: is a file, not a folder")
     if not path.is_dir():
         return
-    if Path.cwd().resolve().is_relative_to(path.resolve()):
+    if Path.cwd().resolve().is_relative_to(resolved(path)):
         raise OSError(f"{path}: is the current folder or holds it; name a folder of "
                       "its own")
     entries = sorted(path.iterdir())
@@ -436,9 +436,18 @@ def check_distinct_paths(inputs, outputs) -> None:
                 raise ValueError(f"{out}: the output would overwrite the {role} {other}")
 
 
+def resolved(path: str | Path) -> Path:
+    """``path`` with links and ``..`` resolved; a link that loops is an OSError naming
+    ``path`` (Python raises RuntimeError for it, or OSError ELOOP)."""
+    try:
+        return Path(path).resolve()
+    except (RuntimeError, OSError):
+        raise OSError(f"{path}: a symbolic link that loops (it leads back to itself)") from None
+
+
 def same_file(a: Path, b: Path) -> bool:
     """The same file: one path after resolving links and ``..``, or one file on disk."""
-    if a.resolve() == b.resolve():
+    if resolved(a) == resolved(b):
         return True
     try:
         return os.path.samefile(a, b)

@@ -55,11 +55,21 @@ def ignore_signal(signum, frame) -> None:
 
 def stop(exc: BaseException) -> None:
     """The one line and exit status of an interruption."""
+    note = getattr(exc, NOTE, "")
     if isinstance(exc, Terminated):
-        click.echo("vsmatch: terminated", err=True)
+        click.echo(f"vsmatch: terminated{note}", err=True)
         sys.exit(EXIT_TERMINATED)
-    click.echo("vsmatch: interrupted", err=True)
+    click.echo(f"vsmatch: interrupted{note}", err=True)
     sys.exit(EXIT_INTERRUPTED)
+
+
+#: The attribute that carries what a command adds to the one line of its failure.
+NOTE = "vsmatch_note"
+
+
+def add_note(exc: BaseException, text: str) -> None:
+    """Say ``text`` after the one line of ``exc`` (an error or an interruption)."""
+    setattr(exc, NOTE, f"{getattr(exc, NOTE, '')}; {text}")
 
 
 def debugging() -> bool:
@@ -76,18 +86,20 @@ def friendly_errors(func):
     def wrapper(*args, **kwargs):
         try:
             return func(*args, **kwargs)
-        except click.ClickException:
-            raise
         except BrokenPipeError:  # `vsmatch ... | head`: the reader has what it wanted
             try:  # Python's own flush at exit must stay quiet too
                 os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             except (AttributeError, OSError, ValueError):  # no real stdout
                 pass
             sys.exit(EXIT_BROKEN_PIPE)
+        except click.ClickException as exc:
+            if getattr(exc, NOTE, ""):
+                exc.message += getattr(exc, NOTE)
+            raise
         except EXPECTED_ERRORS as exc:
             if debugging():
                 raise
-            raise click.ClickException(one_line(exc)) from None
+            raise click.ClickException(one_line(exc) + getattr(exc, NOTE, "")) from None
         except KeyboardInterrupt as exc:
             stop(exc)
         except (Exception, RecursionError, MemoryError) as exc:
@@ -97,7 +109,7 @@ def friendly_errors(func):
             where = " ".join(["vsmatch"] + (ctx.command_path.split()[1:] if ctx else []))
             raise click.ClickException(
                 f"{where}: unexpected {type(exc).__name__}: {one_line(exc)[:300]} "
-                "(--debug shows the traceback)") from None
+                f"(--debug shows the traceback){getattr(exc, NOTE, '')}") from None
     return wrapper
 
 
@@ -314,9 +326,9 @@ def check_new_folder(folder: Path) -> None:
 
 def check_outside(folder: Path, outputs, what: str) -> None:
     """Refuse an output inside ``folder`` (a data set that is read, say)."""
-    root = Path(folder).resolve()
+    root = io.resolved(folder)
     for path in outputs:
-        if path is not None and Path(path).resolve().is_relative_to(root):
+        if path is not None and io.resolved(path).is_relative_to(root):
             raise click.ClickException(f"{path}: the output would write into the {what} "
                                        f"{folder}, which is read")
 

@@ -10,7 +10,7 @@ import click
 from .. import datasets, evaluation, io
 from ..config import load_config
 from ..peers import PEER_METHODS
-from .common import (POSITIVE, check_outputs, check_outside, data_root_option, echo, examples,
+from .common import (POSITIVE, add_note, check_outputs, check_outside, data_root_option, echo, examples,
                      friendly_errors, verbose, verbosity_options)
 
 from .main import main
@@ -93,13 +93,22 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, figure_pa
     quiet = ctx.find_root().obj.get("quiet")
     runs = len(configs) * len(scenes) * (1 + len(levels) * seeds)
     disparities = {} if figure_path is not None else None
-    with tqdm(total=runs, disable=quiet, unit="run", leave=False) as bar:
+    with tqdm(total=runs, disable=quiet, unit="run", leave=False) as bar, \
+            io.output_folder(out_dir):
         def done(method: str, scene: str) -> None:
             bar.set_postfix_str(f"{method}/{scene}")
             bar.update(1)
-        report = evaluation.evaluate(scenes, configs, dataset=dataset, threshold=threshold,
-                                     out_dir=out_dir, on_done=done, ranges=ranges,
-                                     disparities=disparities)
+        try:
+            report = evaluation.evaluate(scenes, configs, dataset=dataset,
+                                         threshold=threshold, out_dir=out_dir, on_done=done,
+                                         ranges=ranges, disparities=disparities)
+        except (KeyboardInterrupt, Exception) as exc:
+            # What is written stays (each file whole): say so, rather than leave a
+            # half-filled folder without a word.
+            if out_dir is not None and any(p.is_file() for p in Path(out_dir).rglob("*")):
+                add_note(exc, f"--out-dir {out_dir} holds only the runs that finished "
+                              "(each file whole)")
+            raise
         if levels:
             evaluation.evaluate_noise(scenes, configs, report, levels=levels, seeds=seeds,
                                       on_done=done)

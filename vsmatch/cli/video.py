@@ -22,10 +22,17 @@ from .main import main
 VIDEO_CODECS = {".avi": "MJPG", ".mp4": "mp4v"}
 
 
+#: The largest camera index OpenCV takes (a C int).
+MAX_CAMERA_INDEX = 2**31 - 1
+
+
 def _open(source: str) -> cv2.VideoCapture:
     """A video file, or a camera index (``0``, ``1``, ...). FFmpeg's own complaints
     ("moov atom not found") are kept off stderr: our one line says what is wrong."""
     camera = source.isdigit()
+    if camera and int(source) > MAX_CAMERA_INDEX:
+        raise click.ClickException(f"{source}: no camera has this index (0..."
+                                   f"{MAX_CAMERA_INDEX})")
     if not camera and not Path(source).is_file():
         raise click.ClickException(f"{source}: file not found")
     with io.native_stderr_silenced():
