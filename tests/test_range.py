@@ -205,3 +205,21 @@ def test_min_disp_alone_is_honoured_by_video(tmp_path, rng):
                                        "--config", "fast"])
     assert result.exit_code == 0, result.output
     assert "disparities 3.." in result.output, result.output
+
+
+@pytest.mark.data
+@pytest.mark.parametrize("name", ["Piano", "ArtL"])
+def test_a_negative_found_range_stays_near_the_truth(data_dir, name):
+    """Views cropped against each other so that the disparities run below 0: the found
+    bottom covers the truth without reaching far past it (unsure dense matches piled up
+    at the dense check's own bottom: Piano -67 for a true -15.7, ArtL -53 for -8.8)."""
+    scene = datasets.load_dataset("middlebury2014-quarter", data_dir, names=[name])[0]
+    mask = scene.masks["nonocc"]
+    shift = round(float(scene.ground_truth[mask].max()) / 2)
+    left = np.ascontiguousarray(scene.left[:, shift:])
+    right = np.ascontiguousarray(scene.right[:, :-shift])
+    truth = (scene.ground_truth - shift)[:, shift:][mask[:, shift:]]
+    found = search_range.estimate_disparity_range(left, right)
+    assert found.min_disp <= truth.min() and truth.max() <= found.max_disp
+    margin = search_range.MARGIN_FACTOR * truth.min() - search_range.MARGIN_PIXELS
+    assert found.min_disp >= margin - 6, (found.min_disp, truth.min())
