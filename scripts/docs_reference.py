@@ -14,7 +14,7 @@ from pathlib import Path
 
 import click
 
-from vsmatch.cli.main import main
+from vsmatch.cli import main
 from vsmatch.config import Config, bundled_config_names, load_config
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -17,7 +17,7 @@ import click.testing
 import pytest
 
 import vsmatch
-from vsmatch.cli.main import main
+from vsmatch.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", ROOT / "CHANGELOG.md", *sorted((ROOT / "docs").glob("*.md"))]

@@ -28,7 +28,8 @@ from .main import main
                    ".png (16-bit, value = round(256 d), 0 = invalid).")
 @click.option("--max-disp", type=MAX_DISP, default=None,
               help="Largest disparity searched, or 'auto' to estimate it from the pair. "
-                   "Default: the calibration's ndisp - 1, else auto.")
+                   "Default: the calibration's range (ndisp, from its dmin or 0), else "
+                   "auto (never below the calibration's -doffs).")
 @click.option("--min-disp", type=int, default=None,
               help="Smallest disparity searched (may be negative); left pixels with no "
                    "candidate in the range are invalid, as with OpenCV's minDisparity. "
