@@ -325,3 +325,29 @@ def test_a_calib_txt_with_a_byte_order_mark_is_read(tmp_path):
     path.write_bytes("\ufeffcam0=[500 0 20; 0 500 15; 0 0 1]\ndoffs=0\nbaseline=100\n"
                      .encode("utf-8"))
     assert geometry.read_calibration(path).focal == 500
+
+
+def test_rectify_names_the_files_it_wrote(tmp_path):
+    from test_never_silent_2 import write_opencv_rig, write_pair
+
+    left, right = write_pair(tmp_path, np.random.default_rng(0))
+    calib = write_opencv_rig(tmp_path / "rig.yaml")
+    result = invoke("rectify", left, right, "--calib", calib, "--to", f"{tmp_path}/rect/")
+    assert result.exit_code == 0, result.output
+    assert f"wrote {tmp_path}/rect/im0.png, im1.png, calib.txt" in result.output
+    assert "//" not in result.output
+
+
+def test_a_raw_pair_whose_rows_disagree_after_rectifying_is_not_told_to_rectify(tmp_path):
+    """vsmatch rectified the views itself: "rectify it first" would be wrong advice."""
+    import vsmatch
+    from vsmatch import search_range
+    from test_never_silent import shifted_pair
+    from test_never_silent_2 import write_opencv_rig
+
+    left, right = shifted_pair(np.random.default_rng(1), 8, dy=6, height=96, width=160)
+    stereo = vsmatch.StereoMatcher(calib=str(write_opencv_rig(tmp_path / "rig.yaml")))
+    with pytest.raises(ValueError) as caught:
+        stereo.compute(left, right)
+    assert search_range.STILL_NOT_RECTIFIED in str(caught.value)
+    assert search_range.NOT_RECTIFIED not in str(caught.value)
