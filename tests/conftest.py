@@ -61,3 +61,25 @@ HARD_SCENES = ("Vintage", "terrains_2l", "terrains_2s")
 def standard_scenes(scenes):
     """The scenes of a data set without :data:`HARD_SCENES`."""
     return [scene for scene in scenes if scene.name not in HARD_SCENES]
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """``small_disk(kilobytes)``: a folder on a tmpfs that small (a disk that fills up),
+    unmounted after the test; skips where tmpfs cannot be mounted."""
+    import subprocess
+
+    mounted = []
+
+    def mount(kilobytes: int):
+        disk = tmp_path / f"disk{len(mounted)}"
+        disk.mkdir()
+        if subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={kilobytes}k", "tmpfs",
+                           str(disk)], capture_output=True).returncode != 0:
+            pytest.skip("cannot mount a small tmpfs here")
+        mounted.append(disk)
+        return disk
+
+    yield mount
+    for disk in mounted:
+        subprocess.run(["umount", str(disk)], capture_output=True)

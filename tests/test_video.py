@@ -108,28 +108,18 @@ def test_overwrite_never_deletes_what_vsmatch_did_not_write(tmp_path, rng, monke
     assert list(work.iterdir()) == [] and not list(tmp_path.glob(".*old*"))
 
 
-def test_a_full_frames_folder_is_named_by_its_own_path(tmp_path, rng):
+def test_a_full_frames_folder_is_named_by_its_own_path(tmp_path, rng, small_disk):
     """A write that fails inside the staged --frames folder names the folder the user
     gave, never its temporary, in one line (no libpng line beside it)."""
-    import subprocess
-
-    disk = tmp_path / "disk"
-    disk.mkdir()
-    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(disk)],
-                      capture_output=True).returncode != 0:
-        import pytest
-        pytest.skip("cannot mount a small tmpfs here")
-    try:
-        write_videos(tmp_path, rng)
-        result = invoke("video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
-                        tmp_path / "d.avi", "--frames", disk / "fr", "--max-disp", 16)
-        assert result.exit_code == 1, result.output
-        lines = [line for line in result.output.splitlines() if "Error" in line]
-        assert len(lines) == 1 and "could not be written" in lines[0], result.output
-        assert f"{disk / 'fr'}/0000" in lines[0] and ".tmp" not in lines[0], lines[0]
-        assert not list(disk.iterdir()) and not (tmp_path / "d.avi").exists()
-    finally:
-        subprocess.run(["umount", str(disk)], capture_output=True)
+    disk = small_disk(64)
+    write_videos(tmp_path, rng)
+    result = invoke("video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
+                    tmp_path / "d.avi", "--frames", disk / "fr", "--max-disp", 16)
+    assert result.exit_code == 1, result.output
+    lines = [line for line in result.output.splitlines() if "Error" in line]
+    assert len(lines) == 1 and "could not be written" in lines[0], result.output
+    assert f"{disk / 'fr'}/0000" in lines[0] and ".tmp" not in lines[0], lines[0]
+    assert not list(disk.iterdir()) and not (tmp_path / "d.avi").exists()
 
 
 def test_two_videos_of_different_frame_rates_are_refused(tmp_path, rng):
