@@ -365,6 +365,17 @@ def _signals_deferred():
             signal.raise_signal(pending[0])
 
 
+#: Called before the outputs of an :func:`all_or_none` block land; each raises if the
+#: process was asked to stop in a way the stop's own exception did not carry through.
+_STOP_CHECKS: list[Callable[[], None]] = []
+
+
+def add_stop_check(check: Callable[[], None]) -> None:
+    """Run ``check()`` before every group of outputs lands (see :data:`_STOP_CHECKS`)."""
+    if check not in _STOP_CHECKS:
+        _STOP_CHECKS.append(check)
+
+
 @contextlib.contextmanager
 def all_or_none():
     """Writes inside the block land together when it ends without an error; on an error
@@ -377,6 +388,8 @@ def all_or_none():
     token = _STAGED.set(staged)
     try:
         yield
+        for check in _STOP_CHECKS:
+            check()
         with _signals_deferred():
             while staged:
                 tmp, path = staged[0]

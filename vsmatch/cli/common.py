@@ -46,7 +46,23 @@ def on_sigterm(signum, frame):
     # the default, which would kill the process on a late second signal).
     signal.signal(signal.SIGTERM, ignore_signal)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    TERMINATED.append(signum)
     raise Terminated()
+
+
+#: SIGTERMs received. Raised where the handler ran, the exception can still be lost: inside
+#: a ctypes callback (Numba's compiler calls back into Python) Python prints "Exception
+#: ignored" and carries on. So it is raised again before any output lands and when the
+#: command returns (:func:`raise_if_terminated`).
+TERMINATED: list[int] = []
+
+
+def raise_if_terminated() -> None:
+    if TERMINATED:
+        raise Terminated()
+
+
+io.add_stop_check(raise_if_terminated)
 
 
 def ignore_signal(signum, frame) -> None:
@@ -85,7 +101,9 @@ def friendly_errors(func):
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         try:
-            return func(*args, **kwargs)
+            result = func(*args, **kwargs)
+            raise_if_terminated()  # a SIGTERM whose exception was swallowed on the way
+            return result
         except BrokenPipeError:  # `vsmatch ... | head`: the reader has what it wanted
             try:  # Python's own flush at exit must stay quiet too
                 os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
