@@ -7,10 +7,10 @@ whether its disparity is right by the dataset's measure (bad 1.0 on middlebury2 
 the non-occluded pixels with ground truth, each dataset weighing the same and each scene
 the same within it; the shipped confidence is that model times the matchability gate
 (vsmatch.confidence.matchability), which pairs with nothing to match (flat grey, unrelated
-noise, two different scenes) are measured against. Printed per dataset: Hu and Mordohai's r (0 = a perfect ordering,
-about 1 = chance) of the fitted model, of the model fitted without that dataset (held
-out), of the left-right label alone, of the cost-curve margin alone, and of SGBM's
-kept/invalid mask (uniqueness 10, disp12MaxDiff 1) on its own disparity.
+noise, two different scenes) are measured against. Printed per dataset: Hu and Mordohai's r
+(0 = a perfect ordering, about 1 = chance) of the fitted model, of the model fitted without
+that dataset (held out), of the left-right label alone, of the cost-curve margin alone, and
+of SGBM's kept/invalid mask (uniqueness 10, disp12MaxDiff 1) on its own disparity.
 
     python scripts/fit_confidence.py [--data-root DIR] [--write]
 

@@ -30,8 +30,10 @@ from vsmatch.config import ConfigError, config_from_dict, load_config
 PAPER_NOISE = {0.02: 5.02, 0.05: 8.65, 0.10: 17.33, 0.15: 38.46}
 
 
-def objective(cfg, scene_sets, noise_levels=(), seeds=1, base=None) -> tuple[float, dict[str, float]]:
-    """Mean of the datasets' means (each divided by ``base[dataset]`` when given); with ``noise_levels``, instead the mean over the
+def objective(cfg, scene_sets, noise_levels=(), seeds=1, base=None
+              ) -> tuple[float, dict[str, float]]:
+    """Mean of the datasets' means (each divided by ``base[dataset]`` when given); with
+    ``noise_levels``, instead the mean over the
     levels of middlebury2's noisy figure divided by the paper's (below 1 beats the paper)."""
     if noise_levels:
         scenes = scene_sets["middlebury2"]

@@ -40,7 +40,10 @@ def cost_volume(cl, cr, gl, gr, il, ir, n_disp, lam_s, lam_g, lam_ad):
 def cross_arms(image, theta, grad, tau1, tau2, tau3, l1, l2, kappa, g_sat):
     h, w = theta.shape
     img = image.astype(float).reshape(h, w, -1)
-    dist = lambda a, b: np.abs(img[a] - img[b]).max()
+
+    def dist(a, b):
+        return np.abs(img[a] - img[b]).max()
+
     out = np.zeros((h, w, 4), dtype=int)
     for y in range(h):
         for x in range(w):
@@ -78,7 +81,9 @@ def aggregate(volume, arms_l, arms_r, iterations):
         for y in range(h):
             for x in range(w):
                 for d in range(n):
-                    a = lambda yy, xx, k: _combined(arms_l, arms_r, yy, xx, d, k)
+                    def a(yy, xx, k, d=d):
+                        return _combined(arms_l, arms_r, yy, xx, d, k)
+
                     pixels = []
                     if rows_first:  # vertical arm of p, each with its horizontal arm
                         for yy in range(y - a(y, x, 2), y + a(y, x, 3) + 1):

@@ -170,8 +170,9 @@ def _band_search_by_hand(volume, arms, lo, hi):
         for x in range(width):
             if lo[y, x] > hi[y, x]:
                 continue
-            l, r, u, d = (int(a) for a in arms[:, y, x])
-            sums = volume[y, x - l:x + r + 1].sum(axis=0) + volume[y - u:y + d + 1, x].sum(
+            left, right, up, down = (int(a) for a in arms[:, y, x])
+            sums = volume[y, x - left:x + right + 1].sum(axis=0) + volume[
+                y - up:y + down + 1, x].sum(
                 axis=0) - volume[y, x]
             best = lo[y, x] + int(np.argmin(sums[lo[y, x]:hi[y, x] + 1]))
             out[y, x] = best

@@ -142,7 +142,8 @@ def write_views(folder, left, right):
 def searched(result):
     """The range a -v run says it searches."""
     assert result.exit_code == 0, result.output
-    line = next(l for l in result.output.splitlines() if "searching disparities" in l)
+    line = next(text for text in result.output.splitlines()
+                if "searching disparities" in text)
     low, high = line.split()[-1].split("..")
     return int(low), int(high)
 

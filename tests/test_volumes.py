@@ -26,10 +26,10 @@ def test_reused_volumes_give_the_same_bytes(rng):
              random_pair(rng, height=30, width=48, shift=3),
              random_pair(rng, height=30, width=48, shift=2)]
     ranges = [12, 6, 9]
-    fresh = [pipeline.run(l, r, max_disp=m, config="default") for (l, r), m in zip(pairs, ranges)]
+    fresh = [pipeline.run(a, b, max_disp=m, config="default") for (a, b), m in zip(pairs, ranges)]
     with volumes.reused():
-        again = [pipeline.run(l, r, max_disp=m, config="default")
-                 for (l, r), m in zip(pairs, ranges)]
+        again = [pipeline.run(a, b, max_disp=m, config="default")
+                 for (a, b), m in zip(pairs, ranges)]
     for a, b in zip(fresh, again):
         assert a.disparity.tobytes() == b.disparity.tobytes()
         assert a.confidence.tobytes() == b.confidence.tobytes()

@@ -418,7 +418,8 @@ def config_from_dict(data: dict[str, Any] | None, base: Config | None = None) ->
         for key, item in value.items():
             if key not in fields:
                 allowed = ", ".join(fields)
-                raise ConfigError(f"unknown config key {quote(f'{name}.{key}')} (allowed: {allowed})")
+                raise ConfigError(f"unknown config key {quote(f'{name}.{key}')} "
+                                  f"(allowed: {allowed})")
             changes[key] = _check_value(f"{name}.{key}", fields[key], item)
         sections[name] = dataclasses.replace(current, **changes)
     cfg = dataclasses.replace(base, **sections)

@@ -3,7 +3,8 @@
 Cross-based aggregation assumes the surface inside each cross is fronto-parallel, so a road
 or a desk seen at a grazing angle comes out in steps, and pixels the left-right check
 rejected are filled along their row with a constant. Here each pixel's cross region (arms
-grown on the left view halved, as the band search's, longer than the aggregation's) gets the least-squares plane
+grown on the left view halved, as the band search's, longer than the aggregation's) gets the
+least-squares plane
 ``d = a x + b y + c`` through the pixels the check kept: the moments of those pixels are
 summed over the region with the aggregation's own kernels (a 9-channel "volume"), and the
 plane solved per pixel. Outliers leave the fit over a second pass. A rejected pixel takes

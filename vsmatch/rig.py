@@ -374,14 +374,14 @@ def _ros_pair(left: Path, right: Path) -> RawRig:
         projection = matrices["projection_matrix"]
         check_camera_matrix(path, "projection_matrix", projection[:, :3], None)
         cams.append((matrices, size, model))
-    (l, size, model), (r, right_size, right_model) = cams
+    (left_cam, size, model), (right_cam, right_size, right_model) = cams
     if right_size != size:
         raise CalibrationError(f"{right}: image size {right_size[0]}x{right_size[1]} differs "
                                f"from {left}'s {size[0]}x{size[1]}")
     if right_model != model:
         raise CalibrationError(f"{right}: distortion_model differs from {left}'s")
     # Rectified views share one focal length and one row of the principal point.
-    left_p, right_p = l["projection_matrix"], r["projection_matrix"]
+    left_p, right_p = left_cam["projection_matrix"], right_cam["projection_matrix"]
     for (i, j), what in (((0, 0), "fx"), ((1, 1), "fy"), ((1, 2), "cy")):
         if not math.isclose(left_p[i, j], right_p[i, j], rel_tol=1e-4, abs_tol=1e-3):
             raise CalibrationError(
@@ -389,17 +389,18 @@ def _ros_pair(left: Path, right: Path) -> RawRig:
                 f"{left_p[i, j]:g}: rectified views share them (are the files of one rig?)")
     # The pose of the right camera from the rectifications: X2 = R2^T R1 X1 + T with the
     # baseline along the rectified x axis, Tx = -fx' B in P2.
-    rotation = r["rectification_matrix"].T @ l["rectification_matrix"]
-    baseline = -r["projection_matrix"][0, 3] / r["projection_matrix"][0, 0]
+    rotation = right_cam["rectification_matrix"].T @ left_cam["rectification_matrix"]
+    baseline = -right_cam["projection_matrix"][0, 3] / right_cam["projection_matrix"][0, 0]
     if not baseline > 0:
         raise CalibrationError(f"{right}: projection_matrix gives the baseline {baseline:g} "
                                "(Tx = -fx B must be negative for the right camera); are the "
                                "files swapped?")
-    translation = r["rectification_matrix"].T @ np.array([-baseline, 0.0, 0.0])
-    rig = RawRig(K1=l["camera_matrix"], D1=l["distortion"], K2=r["camera_matrix"],
-                 D2=r["distortion"], R=rotation, T=translation, size=size, model=model,
-                 rectify=(l["rectification_matrix"], r["rectification_matrix"]),
-                 project=(l["projection_matrix"], r["projection_matrix"]))
+    translation = right_cam["rectification_matrix"].T @ np.array([-baseline, 0.0, 0.0])
+    rig = RawRig(K1=left_cam["camera_matrix"], D1=left_cam["distortion"],
+                 K2=right_cam["camera_matrix"], D2=right_cam["distortion"], R=rotation,
+                 T=translation, size=size, model=model,
+                 rectify=(left_cam["rectification_matrix"], right_cam["rectification_matrix"]),
+                 project=(left_cam["projection_matrix"], right_cam["projection_matrix"]))
     return check_rig(right, rig, {"K1": f"{left}'s camera_matrix",
                                   "K2": "camera_matrix",
                                   "D1": f"{left}'s distortion_coefficients",

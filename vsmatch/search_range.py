@@ -15,7 +15,8 @@ Two estimates of the largest disparity, each robust where the other is weak:
 The larger estimate, times :data:`MARGIN_FACTOR` plus :data:`MARGIN_PIXELS`, is the
 range's top (rounded up); its bottom is 0, or below 0 by the same margin when the low
 percentile of the sparse disparities is negative (verged cameras, cropped views). Views
-that are swapped or not rectified are refused (:func:`pair_problem`). The constants were set on the 24 scenes of
+that are swapped or not rectified are refused (:func:`pair_problem`). The constants were set on
+the 24 scenes of
 middlebury2, middlebury-third, middlebury2014-quarter and kitti2015 together so that the
 range covers every scene's non-occluded ground truth (``python scripts/disparity_range.py``
 prints the table).

@@ -10,8 +10,8 @@ import click
 from .. import datasets, evaluation, io
 from ..config import load_config
 from ..peers import PEER_METHODS
-from .common import (POSITIVE, add_note, check_outputs, check_outside, data_root_option, echo, examples,
-                     friendly_errors, verbose, verbosity_options)
+from .common import (POSITIVE, add_note, check_outputs, check_outside, data_root_option, echo,
+                     examples, friendly_errors, verbose, verbosity_options)
 
 from .main import main
 

@@ -169,9 +169,8 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
     if min_confidence is not None:  # every output, the disparity too
         disp = confidence.keep_confident(disp, result.confidence, min_confidence)
     # Depth and clouds keep only what is likely right unless told otherwise.
-    metric_disp = confidence.keep_confident(
-        result.disparity, result.confidence,
-        DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence)
+    kept_at = DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence
+    metric_disp = confidence.keep_confident(result.disparity, result.confidence, kept_at)
     # Every output of the run, or none of them (nor the --rectified folder).
     with io.output_folder(rectified_dir), io.all_or_none():
         io.write_disparity(out, disp)
@@ -184,13 +183,11 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
             points, colours = geometry.point_cloud(metric_disp, left_image, camera,
                                                    max_depth=max_depth)
             io.write_point_cloud(cloud_path, geometry.ply_vertices(points, colours))
-            verbose(ctx, f"{len(points)} points in the cloud (confidence >= "
-                          f"{DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence:g}"
+            verbose(ctx, f"{len(points)} points in the cloud (confidence >= {kept_at:g}"
                           f"; {int(np.isfinite(result.disparity).sum()) - len(points)} left out)")
         if preview_path is not None:
             io.imwrite_atomic(preview_path, preview.disparity_preview(
-                disp, result.confidence, DEFAULT_MIN_CONFIDENCE if min_confidence is None
-                else min_confidence))
+                disp, result.confidence, kept_at))
         if confidence_path is not None:
             io.write_confidence(confidence_path, result.confidence)
     _report_run(ctx, result)
