@@ -8,7 +8,7 @@ import threading
 import click
 
 from .. import __version__
-from .common import OneLineErrors, examples, on_sigterm
+from .common import TERMINATED, OneLineErrors, examples, on_sigterm
 
 
 @click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]},
@@ -35,6 +35,7 @@ def main(ctx: click.Context, quiet: bool, verbose: bool, debug: bool) -> None:
     ctx.obj["debug"] = debug
     _silence_opencv()
     if threading.current_thread() is threading.main_thread():
+        TERMINATED.clear()  # a command run before in this process (tests) is over
         signal.signal(signal.SIGTERM, on_sigterm)
 
 
