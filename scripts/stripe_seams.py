@@ -16,7 +16,7 @@ import argparse
 
 import numpy as np
 
-from vsmatch import datasets, metrics, pipeline
+from vsmatch import datasets, metrics, pipeline, tiles
 from vsmatch.bench import upscaled_scene
 from vsmatch.config import config_from_dict, load_config
 
@@ -44,7 +44,7 @@ def main() -> None:
         for name, left, right, gt, mask, max_disp, factor in group:
             one = pipeline.match(left, right, max_disp=max_disp, config=whole_cfg)
             cut = pipeline.match(left, right, max_disp=max_disp, config=cfg)
-            counts.append(len(pipeline.stripe_layout(
+            counts.append(len(tiles.stripe_layout(
                 left.shape[0], pipeline.stripe_rows(left.shape[1], max_disp + 1, cfg),
                 args.overlap)))
             with np.errstate(invalid="ignore"):

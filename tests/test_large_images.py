@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from vsmatch import cost, datasets, metrics, optimization, pipeline, pyramid, sensitivity
+from vsmatch import (aggregation, cost, datasets, images, metrics, optimization, pipeline, pyramid,
+                     sensitivity, tiles)
 from vsmatch.aggregation import cross_arms
 from vsmatch.bench import upscaled_scene
 from vsmatch.cli import main
@@ -53,7 +54,7 @@ def test_band_scanline_over_whole_ranges_is_the_scanline(rng):
 @pytest.mark.parametrize("height, rows, overlap", [(100, 1000, 8), (100, 40, 8), (997, 200, 48),
                                                    (1984, 575, 48)])
 def test_stripe_cores_tile_the_image(height, rows, overlap):
-    layout = pipeline.stripe_layout(height, rows, overlap)
+    layout = tiles.stripe_layout(height, rows, overlap)
     covered = np.zeros(height, int)
     for first, stop, core_first, core_stop in layout:
         assert stop - first <= rows
@@ -122,7 +123,7 @@ def test_refine_blocks_do_not_change_the_result(teddy, monkeypatch):
     s = teddy
     cfg = load_config(None)
     _, coarse_max = pyramid.level_down(s.left.shape[1], s.max_disp)
-    coarse = pipeline.run(pyramid.downsample(s.left), pyramid.downsample(s.right),
+    coarse = pipeline.run(images.downsample(s.left), images.downsample(s.right),
                           max_disp=coarse_max, config=cfg)
     whole = pyramid.refine(s.left, s.right, coarse.disparity, coarse.labels, s.max_disp, cfg)
     monkeypatch.setattr(pyramid, "REFINE_ROWS", 50)
@@ -138,7 +139,7 @@ def test_band_scanline_runs_in_stripes_within_the_budget(teddy, monkeypatch):
     cfg = load_config(None)
     assert cfg.pyramid.scanline and cfg.scanline.enabled
     _, coarse_max = pyramid.level_down(s.left.shape[1], s.max_disp)
-    coarse = pipeline.run(pyramid.downsample(s.left), pyramid.downsample(s.right),
+    coarse = pipeline.run(images.downsample(s.left), images.downsample(s.right),
                           max_disp=coarse_max, config=cfg)
     calls = []
     original = optimization.band_scanline
@@ -256,7 +257,7 @@ def test_arms_from_below_stay_inside_the_image_and_the_length(rng, height, width
     image = rng.integers(0, 256, (height, width, 3), dtype=np.uint8)
     image[:, : width // 2] = 128  # a flat half: arms run to the border there
     cfg = dataclasses.replace(load_config("fast").arms, l1=4, l2=4)
-    arms = pyramid.arms_from_below(image, cfg).astype(int)
+    arms = aggregation.arms_from_below(image, cfg).astype(int)
     xs, ys = np.arange(width), np.arange(height)[:, None]
     assert (arms[0] <= xs).all() and (arms[1] <= width - 1 - xs).all()
     assert (arms[2] <= ys).all() and (arms[3] <= height - 1 - ys).all()

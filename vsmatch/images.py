@@ -52,11 +52,19 @@ def mirrored(array: np.ndarray, *, axis: int = -1, pad: int = 0, fill: int = 0) 
     return out
 
 
-def row_blocks(height: int, rows: int, margin: int, start: int = 0, stop: int | None = None):
-    """``(top, bottom, y0, y1)`` of blocks of at most ``rows`` rows tiling ``start ..
-    stop`` (default: the whole height), each with the ``margin`` rows on either side that
-    the image has: ``y0 .. y1`` is read, ``top .. bottom`` kept."""
-    stop = height if stop is None else stop
-    for top in range(start, stop, rows):
-        bottom = min(stop, top + rows)
-        yield top, bottom, max(0, top - margin), min(height, bottom + margin)
+def downsample(image: np.ndarray) -> np.ndarray:
+    """One pyramid level down: Gaussian 5 x 5, every other row and column."""
+    return cv2.pyrDown(image)
+
+
+def upsample_nearest(array: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Each fine pixel (y, x) takes coarse pixel (y // 2, x // 2) (the last coarse row
+    and column where the fine size is odd beyond them), over the last two axes of
+    ``array`` (the arms' planes come along)."""
+    rows = np.minimum(np.arange(shape[0]) // 2, array.shape[-2] - 1)
+    cols = np.minimum(np.arange(shape[1]) // 2, array.shape[-1] - 1)
+    if rows[-1] == (shape[0] - 1) // 2 and cols[-1] == (shape[1] - 1) // 2:
+        # The usual case, every index y // 2: repeating is several times faster.
+        doubled = np.repeat(np.repeat(array, 2, axis=-2)[..., :shape[0], :], 2, axis=-1)
+        return np.ascontiguousarray(doubled[..., :shape[1]])
+    return array[..., rows[:, None], cols[None, :]]

@@ -16,7 +16,8 @@ from . import (aggregation, confidence, cost, disparity, noise, optimization, ph
                pyramid, refinement, sensitivity, volumes)
 from .config import Config, CostConfig, load_config
 from .disparity import INVALID_DISPARITY
-from .images import to_grey
+from .images import downsample, to_grey, upsample_nearest
+from .tiles import stripe_layout
 
 
 @dataclass
@@ -235,7 +236,7 @@ def _correct_exposure(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: C
         if width < 2 * cfg.cost.census_width or small_max < 1 or min(
                 small_l.shape[:2]) < 2 * cfg.cost.census_height:
             return right, cfg, None
-        small_l, small_r = pyramid.downsample(small_l), pyramid.downsample(small_r)
+        small_l, small_r = downsample(small_l), downsample(small_r)
         if width <= cfg.photometric.max_width:
             break
     first_disp, matched = _first_match(small_l, small_r, small_max, cfg)
@@ -301,7 +302,7 @@ def _coarse_to_fine(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Con
     """The full search ``levels`` pyramid levels down, then a band search at each level up."""
     if levels == 0:
         return _full_search_in_stripes(left, right, max_disp, cfg)
-    small_l, small_r = pyramid.downsample(left), pyramid.downsample(right)
+    small_l, small_r = downsample(left), downsample(right)
     _, coarse_max = pyramid.level_down(left.shape[1], max_disp)
     coarse = _coarse_to_fine(small_l, small_r, coarse_max, cfg, levels - 1)
     seconds = dict(coarse.seconds)
@@ -312,9 +313,9 @@ def _coarse_to_fine(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Con
             result = refinement.median3(result)
     labels = None
     if coarse.labels is not None:
-        labels = pyramid.upsample_nearest(coarse.labels, left.shape[:2])
+        labels = upsample_nearest(coarse.labels, left.shape[:2])
     # The band search keeps no cost curves: the coarse level's stand for them.
-    curve = {k: pyramid.upsample_nearest(v, left.shape[:2]) for k, v in coarse.curve.items()}
+    curve = {k: upsample_nearest(v, left.shape[:2]) for k, v in coarse.curve.items()}
     return MatchResult(disparity=result, labels=labels, seconds=seconds, config=coarse.config,
                        noise_sigma=coarse.noise_sigma, levels=coarse.levels + 1,
                        stripes=coarse.stripes, curve=curve)
@@ -337,22 +338,6 @@ def stripe_rows(width: int, n_disp: int, cfg: Config) -> int:
                          f"{need} MB" + (" or a smaller overlap" if cfg.memory.overlap > 64
                                          else ""))
     return int(rows)
-
-
-def stripe_layout(height: int, rows: int, overlap: int) -> list[tuple[int, int, int, int]]:
-    """``(first, stop, core_first, core_stop)`` row ranges of stripes of at most ``rows``
-    rows: cores of equal height that tile the image, each with ``overlap`` rows more on
-    either side where the image has them."""
-    if height <= rows:
-        return [(0, height, 0, height)]
-    count = math.ceil(height / (rows - 2 * overlap))
-    core = math.ceil(height / count)
-    layout = []
-    for i in range(count):
-        core_first, core_stop = i * core, min(height, (i + 1) * core)
-        layout.append((max(0, core_first - overlap), min(height, core_stop + overlap),
-                       core_first, core_stop))
-    return layout
 
 
 def _full_search_in_stripes(left: np.ndarray, right: np.ndarray, max_disp: int,

@@ -23,8 +23,8 @@ from ._kernels.planes import (N_MOMENTS, cut_arms_at_jumps, plane_moments, plane
 from .aggregation import keep_arms_inside
 from .config import ArmsConfig, PlanesConfig
 from .disparity import VALID
-from .images import row_blocks
-from .pyramid import arms_from_below
+from .aggregation import arms_from_below
+from .tiles import row_blocks
 
 #: Least variance of a region's pixel coordinates along an axis for a slope along it
 #: (a region one or two pixels wide fits a constant along that axis).

@@ -21,9 +21,10 @@ import numpy as np
 
 from . import aggregation, cost, noise, optimization, refinement, sensitivity
 from ._kernels.band import RUN, band_aggregate, band_costs, band_winners, search_band
-from .config import ArmsConfig, Config
+from .config import Config
 from .disparity import VALID
-from .images import row_blocks, to_grey
+from .images import to_grey, upsample_nearest
+from .tiles import row_blocks, stripe_layout
 
 #: Rows refined at a time at a fine level. The result does not depend on it (every pixel
 #: reads only its cross, inside the margin); it bounds the memory of the per-pixel arrays.
@@ -61,24 +62,6 @@ def level_down(width: int, max_disp: int) -> tuple[int, int]:
     the range kept below the width."""
     width = (width + 1) // 2
     return width, min(int(math.ceil(max_disp / 2)), width - 1)
-
-
-def downsample(image: np.ndarray) -> np.ndarray:
-    """One pyramid level down: Gaussian 5 x 5, every other row and column."""
-    return cv2.pyrDown(image)
-
-
-def upsample_nearest(array: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """Each fine pixel (y, x) takes coarse pixel (y // 2, x // 2) (the last coarse row
-    and column where the fine size is odd beyond them), over the last two axes of
-    ``array`` (the arms' planes come along)."""
-    rows = np.minimum(np.arange(shape[0]) // 2, array.shape[-2] - 1)
-    cols = np.minimum(np.arange(shape[1]) // 2, array.shape[-1] - 1)
-    if rows[-1] == (shape[0] - 1) // 2 and cols[-1] == (shape[1] - 1) // 2:
-        # The usual case, every index y // 2: repeating is several times faster.
-        doubled = np.repeat(np.repeat(array, 2, axis=-2)[..., :shape[0], :], 2, axis=-1)
-        return np.ascontiguousarray(doubled[..., :shape[1]])
-    return array[..., rows[:, None], cols[None, :]]
 
 
 def coarse_extremes(coarse: np.ndarray, coarse_labels: np.ndarray | None
@@ -142,7 +125,7 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
     height, width = left.shape[:2]
     low, high = (upsample_nearest(v, (height, width))
                  for v in coarse_extremes(coarse, coarse_labels))
-    arms_all = arms_from_below(left, arms_cfg)
+    arms_all = aggregation.arms_from_below(left, arms_cfg)
     n_disp = int(max_disp) + 1
     out = np.empty((height, width), dtype=np.float32)
     lo_all, hi_all = search_bands(low, high, max_disp, cfg.pyramid.band)
@@ -161,7 +144,7 @@ def refine(left: np.ndarray, right: np.ndarray, coarse: np.ndarray,
 
 class _BandBlocks:
     """What the band search of rows ``top .. bottom`` needs: the cost terms and arms of
-    rows ``y0 .. y1`` (:func:`vsmatch.images.row_blocks` with a margin that holds every
+    rows ``y0 .. y1`` (:func:`vsmatch.tiles.row_blocks` with a margin that holds every
     cross and census window), and the bands, empty on the margin rows (they are searched
     with their own block)."""
 
@@ -205,12 +188,10 @@ def band_stripe_rows(lo: np.ndarray, hi: np.ndarray, n_disp: int, cfg: Config) -
 def _refine_with_scanline(blocks: _BandBlocks, left: np.ndarray, right: np.ndarray,
                           cfg: Config, out: np.ndarray) -> None:
     """The band search with the scanline optimisation over the bands, in horizontal
-    stripes that fit ``memory.max_mb`` (``pipeline.stripe_layout``: each stripe's core
+    stripes that fit ``memory.max_mb`` (``tiles.stripe_layout``: each stripe's core
     kept, ``memory.overlap`` rows on either side dropped): a stripe's bands aggregated
     block by block, the scanline over the whole stripe, then the winners. One stripe when
     the level fits, the same as the whole level in one piece."""
-    from .pipeline import stripe_layout
-
     height, width = left.shape[:2]
     lo_all, hi_all, n_disp = blocks.lo_all, blocks.hi_all, blocks.n_disp
     rows = band_stripe_rows(lo_all, hi_all, n_disp, cfg)
@@ -244,22 +225,6 @@ def _refine_with_scanline(blocks: _BandBlocks, left: np.ndarray, right: np.ndarr
 def subpixel_fit(cfg: Config) -> int:
     """The band kernels' sub-pixel fit: 0 (none) or the config's (``refinement``'s code)."""
     return refinement.fit_code(cfg.subpixel.fit) if cfg.subpixel.enabled else 0
-
-
-def arms_from_below(view: np.ndarray, cfg: ArmsConfig) -> np.ndarray:
-    """Cross arms ``(4, H, W)`` of ``view`` at most ``cfg.l2`` long, from the level below:
-    grown there with half the lengths, doubled, repeated over each 2 x 2 block and cut at
-    the border. The band search's arms are a few pixels long, where this follows the
-    colour edges as well as arms grown here (fast: bad 2.0 12.31 against 12.32 on
-    Middlebury 2014 quarter, D1 7.37 against 7.43 on KITTI; default on Adirondack 4x: bad
-    8.0 7.91 against 7.92) for a quarter of the work."""
-    small = downsample(view)
-    grad, theta = sensitivity.visual_sensitivity(to_grey(small), cfg.kappa != 0)
-    half = dataclasses.replace(cfg, l2=max(1, cfg.l2 // 2), l1=max(1, cfg.l1 // 2))
-    coarse = aggregation.cross_arms(small, theta, grad, half) * np.uint8(2)
-    # Doubled, a left or up arm stays inside (2 (c - k) >= 0); a right or down one may
-    # pass an odd-sized border by a pixel.
-    return aggregation.keep_arms_inside(upsample_nearest(coarse, view.shape[:2]))
 
 
 def search_in_bands(terms: tuple, arms: np.ndarray, lo: np.ndarray, hi: np.ndarray,
