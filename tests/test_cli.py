@@ -134,13 +134,13 @@ def test_interrupt_exits_130_without_output(pair_files, tmp_path, monkeypatch):
 
 
 def test_interrupt_while_writing_leaves_no_file(pair_files, tmp_path, monkeypatch):
-    real_imwrite = cv2.imwrite
+    real_imencode = cv2.imencode
 
-    def write_then_interrupt(path, image):
-        real_imwrite(path, image)
+    def encode_then_interrupt(ext, image):
+        real_imencode(ext, image)  # the temporary exists by now
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("vsmatch.io.cv2.imwrite", write_then_interrupt)
+    monkeypatch.setattr("vsmatch.io.cv2.imencode", encode_then_interrupt)
     result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm", "--max-disp", 8)
     assert result.exit_code == 130
     assert sorted(p.name for p in tmp_path.iterdir()) == ["l.png", "r.png"]

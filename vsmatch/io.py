@@ -474,10 +474,16 @@ def write_text_atomic(path: str | Path, text: str) -> None:
 
 
 def imwrite_atomic(path: str | Path, image: np.ndarray) -> None:
-    """``cv2.imwrite`` through a temporary file; raises OSError when OpenCV cannot write."""
+    """An image written through a temporary file (see :func:`write_atomic`), in the format
+    its extension names. OpenCV encodes it in memory and Python writes the bytes: some
+    OpenCV encoders (PFM in 4.x) report success on a full disk and leave a cut file, where
+    Python's write raises."""
     def encode(tmp: str) -> None:
-        if not cv2.imwrite(tmp, image):
-            raise OSError("the encoder failed; is the disk full?")
+        ok, data = cv2.imencode(Path(tmp).suffix, image)
+        if not ok:
+            raise OSError("OpenCV could not encode the image")
+        with open(tmp, "wb") as fh:
+            fh.write(data.tobytes())
     write_atomic(path, encode)
 
 
