@@ -140,8 +140,10 @@ class ClusterExecutor(Executor):
         self._patience = _patience(distributed)
         self._scheduler = scheduler
         # Dask's own log lines (tracebacks of lost connections) stay off stderr: the
-        # batch says what happened in one line.
-        self._quieted = _quiet_dask_logs()
+        # batch says what happened in one line. They stay off for the rest of the process:
+        # a lost cluster's leftovers (asyncio's "Task exception was never retrieved" for
+        # a fetch given up) are collected and logged after the executor is closed.
+        _quiet_dask_logs()
         try:
             if workers is not None:
                 self._cluster = _local_cluster(distributed, workers)
@@ -171,8 +173,6 @@ class ClusterExecutor(Executor):
                     part.close(timeout=self._patience)
                 except Exception:  # noqa: BLE001 - closing a broken connection
                     pass
-        _restore_logs(getattr(self, "_quieted", {}))
-        self._quieted = {}
 
     def map_unordered(self, fn, items):
         distributed = _import_distributed()
@@ -255,19 +255,10 @@ class ClusterExecutor(Executor):
 DASK_LOGGERS = ("distributed", "tornado", "asyncio")
 
 
-def _quiet_dask_logs() -> dict[str, int]:
+def _quiet_dask_logs() -> None:
     """Raise Dask's loggers (and those below them, which Dask's config gives levels of
-    their own) to CRITICAL; their former levels, to restore."""
+    their own) to CRITICAL."""
     names = [name for name in logging.root.manager.loggerDict
              if name.split(".")[0] in DASK_LOGGERS]
-    saved = {}
     for name in {*DASK_LOGGERS, *names}:
-        logger = logging.getLogger(name)
-        saved[name] = logger.level
-        logger.setLevel(logging.CRITICAL)
-    return saved
-
-
-def _restore_logs(saved: dict[str, int]) -> None:
-    for name, level in saved.items():
-        logging.getLogger(name).setLevel(level)
+        logging.getLogger(name).setLevel(logging.CRITICAL)
