@@ -46,23 +46,43 @@ def on_sigterm(signum, frame):
     # the default, which would kill the process on a late second signal).
     signal.signal(signal.SIGTERM, ignore_signal)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    TERMINATED.append(signum)
+    STOPS.append(signum)
     raise Terminated()
 
 
-#: SIGTERMs received. Raised where the handler ran, the exception can still be lost: inside
-#: a ctypes callback (Numba's compiler calls back into Python) Python prints "Exception
-#: ignored" and carries on. So it is raised again before any output lands and when the
-#: command returns (:func:`raise_if_terminated`).
-TERMINATED: list[int] = []
+def on_sigint(signum, frame):
+    """Ctrl-C, as Python's own handler, but recorded (see :data:`STOPS`)."""
+    STOPS.append(signum)
+    raise KeyboardInterrupt()
 
 
-def raise_if_terminated() -> None:
-    if TERMINATED:
+#: SIGTERMs and SIGINTs received. Raised where the handler ran, the exception can still be
+#: lost: inside a ctypes callback (Numba's compiler calls back into Python) Python reports
+#: it as unraisable and carries on. So it is raised again before any output lands and when
+#: the command returns (:func:`raise_if_stopped`), and not reported
+#: (:func:`quiet_unraisable_stops`).
+STOPS: list[int] = []
+
+
+def raise_if_stopped() -> None:
+    if signal.SIGTERM in STOPS:
         raise Terminated()
+    if STOPS:
+        raise KeyboardInterrupt()
 
 
-io.add_stop_check(raise_if_terminated)
+io.add_stop_check(raise_if_stopped)
+
+
+def quiet_unraisable_stops(hook):
+    """``sys.unraisablehook`` that keeps a stop lost in a callback off stderr (it is raised
+    again, :data:`STOPS`) and hands anything else to ``hook``."""
+    def unraisable(info):
+        if info.exc_type is not None and issubclass(info.exc_type, KeyboardInterrupt):
+            return
+        hook(info)
+    unraisable.quiet_stops = True
+    return unraisable
 
 
 def ignore_signal(signum, frame) -> None:
@@ -102,7 +122,7 @@ def friendly_errors(func):
     def wrapper(*args, **kwargs):
         try:
             result = func(*args, **kwargs)
-            raise_if_terminated()  # a SIGTERM whose exception was swallowed on the way
+            raise_if_stopped()  # a signal whose exception was swallowed on the way
             return result
         except BrokenPipeError:  # `vsmatch ... | head`: the reader has what it wanted
             try:  # Python's own flush at exit must stay quiet too

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 
 import click
 
 from .. import __version__
-from .common import TERMINATED, OneLineErrors, examples, on_sigterm
+from .common import STOPS, OneLineErrors, examples, on_sigint, on_sigterm, quiet_unraisable_stops
 
 
 @click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]},
@@ -35,8 +36,12 @@ def main(ctx: click.Context, quiet: bool, verbose: bool, debug: bool) -> None:
     ctx.obj["debug"] = debug
     _silence_opencv()
     if threading.current_thread() is threading.main_thread():
-        TERMINATED.clear()  # a command run before in this process (tests) is over
+        STOPS.clear()  # a command run before in this process (tests) is over
         signal.signal(signal.SIGTERM, on_sigterm)
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            signal.signal(signal.SIGINT, on_sigint)
+        if not getattr(sys.unraisablehook, "quiet_stops", False):
+            sys.unraisablehook = quiet_unraisable_stops(sys.unraisablehook)
 
 
 def _silence_opencv() -> None:
