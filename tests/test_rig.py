@@ -351,3 +351,31 @@ def test_a_raw_pair_whose_rows_disagree_after_rectifying_is_not_told_to_rectify(
         stereo.compute(left, right)
     assert search_range.STILL_NOT_RECTIFIED in str(caught.value)
     assert search_range.NOT_RECTIFIED not in str(caught.value)
+
+
+@pytest.mark.data
+def test_a_euroc_sensor_yaml_pair_is_a_raw_rig(data_dir, tmp_path):
+    """EuRoC's cam0/sensor.yaml and cam1/sensor.yaml (OpenCV YAML, T_BS in the body
+    frame): the rig's baseline is EuRoC's 11 cm, the rectified rows agree, and the range
+    found stays above -doffs (a point at infinity)."""
+    from vsmatch import search_range
+
+    clip = data_dir / "real-cameras" / "euroc-clip"
+    calib = [clip / "cam0" / "sensor.yaml", clip / "cam1" / "sensor.yaml"]
+    raw = rig.read_rig(calib)
+    assert raw.size == (752, 480) and raw.model == "pinhole"
+    assert np.linalg.norm(raw.T) == pytest.approx(0.110, abs=0.002)
+    frame = sorted((clip / "cam0").glob("*.png"))[0].name
+    views = [cv2.imread(str(clip / cam / frame)) for cam in ("cam0", "cam1")]
+    rectifier = rig.Rectifier(raw, raw.size)
+    matches = search_range.feature_matches(*rectifier.rectify(*views))
+    assert np.median(np.abs(matches.dy)) < 0.5 and search_range.pair_problem(matches) is None
+    result = invoke("-v", "run", clip / "cam0" / frame, clip / "cam1" / frame, "--calib",
+                    calib[0], "--calib", calib[1], "-o", tmp_path / "d.pfm")
+    assert result.exit_code == 0, result.output
+    lowest = rectifier.calibration().lowest_disparity()
+    line = next(text for text in result.output.splitlines() if "searching" in text)
+    assert int(line.split()[-1].split("..")[0]) >= lowest
+    (tmp_path / "other.yaml").write_text("camera_name: right\n")
+    with pytest.raises(CalibrationError, match="not a EuRoC sensor.yaml"):
+        rig.read_rig([calib[0], tmp_path / "other.yaml"])

@@ -70,9 +70,13 @@ def is_raw_rig(paths) -> bool:
 
 
 def read_rig(paths) -> RawRig:
-    """The raw rig of one OpenCV or Kalibr file, or of a left and a right ROS file."""
+    """The raw rig of one OpenCV or Kalibr file, or of a left and a right ROS
+    ``camera_info`` or EuRoC ``sensor.yaml`` file."""
     paths = [Path(p) for p in paths]
     if len(paths) == 2:
+        first = _mapping(paths[0])
+        if isinstance(first, dict) and "T_BS" in first:
+            return _euroc_pair(*paths)
         return _ros_pair(*paths)
     if len(paths) != 1:
         raise CalibrationError("--calib takes one rig file, or a left and a right ROS "
@@ -144,6 +148,38 @@ def _plain(node, depth: int = 0):
                     "data": matrix.ravel().tolist()}
         return {key: _plain(node.getNode(key), depth + 1) for key in node.keys()}
     return None
+
+
+def _mapping(path: Path):
+    """A calibration file's content: an OpenCV FileStorage file's top level, or YAML."""
+    text = _read(path)
+    return _opencv_mapping(path) if _written_by_opencv(text) else _yaml(path, text)
+
+
+def _euroc_pair(left: Path, right: Path) -> RawRig:
+    """The EuRoC / ASL format: each camera's ``sensor.yaml`` (intrinsics, distortion,
+    resolution) with its pose in the body frame, ``T_BS`` (a body point X_B = T_BS X_S);
+    the right camera's pose in the left's follows: X_1 = T_BS1^-1 T_BS0 X_0."""
+    cams, poses = [], []
+    for path in (left, right):
+        data = _mapping(path)
+        if not isinstance(data, dict) or "T_BS" not in data:
+            raise CalibrationError(f"{path}: not a EuRoC sensor.yaml (T_BS, intrinsics, ...)"
+                                   f"; {left} is one")
+        cams.append(_pinhole_camera(path, path.name, data, "distortion_coefficients"))
+        pose = _matrix(path, "T_BS", _numbers_of(path, "T_BS", data["T_BS"]), (4, 4))
+        if not np.allclose(pose[3], (0, 0, 0, 1)):
+            raise CalibrationError(f"{path}: T_BS's last row must be 0 0 0 1")
+        check_rotation(path, "T_BS (rotation)", pose[:3, :3])
+        poses.append(pose)
+    relative = np.linalg.inv(poses[1]) @ poses[0]
+    rig = _two_cameras(right, (str(left), str(right)), cams, relative[:3, :3].copy(),
+                       relative[:3, 3].copy())
+    return check_rig(right, rig, {"K1": f"{left}'s intrinsics", "K2": "intrinsics",
+                                  "D1": f"{left}'s distortion_coefficients",
+                                  "D2": "distortion_coefficients",
+                                  "R": "T_BS (the cameras' relative rotation)",
+                                  "T": "T_BS (the cameras' relative translation)"})
 
 
 def _read(path: Path) -> str:
@@ -350,8 +386,7 @@ def check_rotation(path: Path, key: str, R: np.ndarray) -> None:
 def _ros_pair(left: Path, right: Path) -> RawRig:
     cams = []
     for path in (left, right):
-        text = _read(path)
-        data = _opencv_mapping(path) if _written_by_opencv(text) else _yaml(path, text)
+        data = _mapping(path)
         if not isinstance(data, dict) or "camera_matrix" not in data:
             raise CalibrationError(f"{path}: not a ROS camera_info file (camera_matrix ...)")
         try:
@@ -415,52 +450,69 @@ def _ros_data(path: Path, key: str, field):
     return field["data"]
 
 
+#: Radial-tangential distortion by the names Kalibr and EuRoC give it (k1 k2 p1 p2, as
+#: OpenCV's first four), and the equidistant (fisheye) model.
+RADTAN = ("radtan", "radial-tangential")
+EQUIDISTANT = "equidistant"
+
+
+def _pinhole_camera(path: Path, name: str, cam, coeffs_key: str):
+    """One camera of a Kalibr camchain or a EuRoC ``sensor.yaml``: ``intrinsics`` [fu,
+    fv, pu, pv], distortion coefficients under ``coeffs_key``, ``distortion_model`` and
+    ``resolution``. Returns K, D (radial-tangential padded to OpenCV's five), the model
+    (``pinhole`` or ``fisheye``) and the size."""
+    if not isinstance(cam, dict):
+        raise CalibrationError(f"{path}: {name} must be a mapping (camera_model, "
+                               f"intrinsics, {coeffs_key}, resolution, ...)")
+    for key in ("intrinsics", coeffs_key, "resolution"):
+        if key not in cam:
+            raise CalibrationError(f"{path}: {name} lacks {key}")
+    intrinsics = _numbers_of(path, f"{name}.intrinsics", cam["intrinsics"])
+    if intrinsics.size != 4:
+        raise CalibrationError(f"{path}: {name}.intrinsics must be four numbers [fu, fv, "
+                               f"pu, pv], has {intrinsics.size}")
+    fu, fv, pu, pv = (float(v) for v in intrinsics)
+    coeffs = list(_numbers_of(path, f"{name}.{coeffs_key}", cam[coeffs_key]))
+    model = cam.get("distortion_model", RADTAN[0])
+    resolution = cam["resolution"]
+    if not isinstance(resolution, list) or len(resolution) != 2:
+        raise CalibrationError(f"{path}: {name}.resolution must be [width, height], "
+                               f"got {resolution}")
+    size = tuple(_whole_number(path, f"{name}.resolution", [v]) for v in resolution)
+    if cam.get("camera_model", "pinhole") != "pinhole":
+        raise CalibrationError(f"{path}: {name}: camera_model "
+                               f"{cam.get('camera_model')} is not supported (pinhole)")
+    if model not in (*RADTAN, EQUIDISTANT):
+        raise CalibrationError(f"{path}: {name}: distortion_model {model} is not "
+                               f"supported ({', '.join((*RADTAN, EQUIDISTANT))})")
+    K = _matrix(path, f"{name}.intrinsics", [[fu, 0, pu], [0, fv, pv], [0, 0, 1]], (3, 3))
+    D = _matrix(path, f"{name}.{coeffs_key}", coeffs, (len(coeffs),))
+    if model in RADTAN:
+        D = np.concatenate([D, np.zeros(max(0, 5 - D.size))])
+    return K, D, "fisheye" if model == EQUIDISTANT else "pinhole", size
+
+
+def _two_cameras(path: Path, names: tuple[str, str], cams, R: np.ndarray, T: np.ndarray
+                 ) -> RawRig:
+    """The rig of two cameras (:func:`_pinhole_camera`) of one model and size."""
+    (K1, D1, model, size), (K2, D2, model2, size2) = cams
+    if model2 != model:
+        raise CalibrationError(f"{path}: {names[1]}'s distortion_model differs from "
+                               f"{names[0]}'s")
+    if size2 != size:
+        raise CalibrationError(f"{path}: {names[1]}'s resolution {list(size2)} differs from "
+                               f"{names[0]}'s {list(size)}")
+    return RawRig(K1=K1, D1=D1, K2=K2, D2=D2, R=R, T=T, size=size, model=model)
+
+
 def _kalibr(path: Path, data: dict) -> RawRig:
-    cams = []
-    for name in ("cam0", "cam1"):
-        cam = data[name]
-        if not isinstance(cam, dict):
-            raise CalibrationError(f"{path}: {name} must be a mapping (camera_model, "
-                                   "intrinsics, distortion_coeffs, resolution, ...)")
-        for key in ("intrinsics", "distortion_coeffs", "resolution"):
-            if key not in cam:
-                raise CalibrationError(f"{path}: {name} lacks {key}")
-        intrinsics = _numbers_of(path, f"{name}.intrinsics", cam["intrinsics"])
-        if intrinsics.size != 4:
-            raise CalibrationError(f"{path}: {name}.intrinsics must be four numbers [fu, fv, "
-                                   f"pu, pv], has {intrinsics.size}")
-        fu, fv, pu, pv = (float(v) for v in intrinsics)
-        coeffs = list(_numbers_of(path, f"{name}.distortion_coeffs", cam["distortion_coeffs"]))
-        model = cam.get("distortion_model", "radtan")
-        resolution = cam["resolution"]
-        if not isinstance(resolution, list) or len(resolution) != 2:
-            raise CalibrationError(f"{path}: {name}.resolution must be [width, height], "
-                                   f"got {resolution}")
-        size = tuple(_whole_number(path, f"{name}.resolution", [v]) for v in resolution)
-        if cam.get("camera_model", "pinhole") != "pinhole":
-            raise CalibrationError(f"{path}: {name}: camera_model "
-                                   f"{cam.get('camera_model')} is not supported (pinhole)")
-        if model not in ("radtan", "equidistant"):
-            raise CalibrationError(f"{path}: {name}: distortion_model {model} is not "
-                                   "supported (radtan, equidistant)")
-        K = _matrix(path, f"{name}.intrinsics", [[fu, 0, pu], [0, fv, pv], [0, 0, 1]], (3, 3))
-        D = _matrix(path, f"{name}.distortion_coeffs", coeffs, (len(coeffs),))
-        cams.append((K, D, model, size))
+    cams = [_pinhole_camera(path, name, data[name], "distortion_coeffs")
+            for name in ("cam0", "cam1")]
     if "T_cn_cnm1" not in data["cam1"]:
         raise CalibrationError(f"{path}: cam1 lacks T_cn_cnm1")
     pose = _matrix(path, "cam1.T_cn_cnm1",
                    _numbers_of(path, "cam1.T_cn_cnm1", data["cam1"]["T_cn_cnm1"]), (4, 4))
-    (K1, D1, model, size), (K2, D2, model2, size2) = cams
-    if model2 != model:
-        raise CalibrationError(f"{path}: cam1's distortion_model {model2} differs from "
-                               f"cam0's {model}")
-    if size2 != size:
-        raise CalibrationError(f"{path}: cam1's resolution {list(size2)} differs from "
-                               f"cam0's {list(size)}")
-    if model == "radtan":  # Kalibr: k1 k2 p1 p2, as OpenCV's first four
-        D1, D2 = (np.concatenate([d, np.zeros(max(0, 5 - d.size))]) for d in (D1, D2))
-    rig = RawRig(K1=K1, D1=D1, K2=K2, D2=D2, R=pose[:3, :3].copy(), T=pose[:3, 3].copy(),
-                 size=size, model="fisheye" if model == "equidistant" else "pinhole")
+    rig = _two_cameras(path, ("cam0", "cam1"), cams, pose[:3, :3].copy(), pose[:3, 3].copy())
     return check_rig(path, rig, {"K1": "cam0.intrinsics", "K2": "cam1.intrinsics",
                                  "D1": "cam0.distortion_coeffs",
                                  "D2": "cam1.distortion_coeffs",

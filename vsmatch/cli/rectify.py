@@ -21,8 +21,8 @@ from .run import rectified_outputs, write_rectified
 @click.argument("right", type=click.Path(dir_okay=False))
 @click.option("--calib", type=click.Path(dir_okay=False), multiple=True, required=True,
               help="The raw rig: an OpenCV stereoCalibrate YAML/XML, a Kalibr "
-                   "camchain.yaml, or a ROS camera_info pair (--calib left.yaml --calib "
-                   "right.yaml).")
+                   "camchain.yaml, or a ROS camera_info or EuRoC sensor.yaml pair (--calib "
+                   "left.yaml --calib right.yaml).")
 @click.option("--to", "folder", type=click.Path(file_okay=False), required=True,
               help="Folder for im0.png, im1.png and calib.txt (created if missing).")
 @click.option("--alpha", type=ALPHA, default=0.0, show_default=True,

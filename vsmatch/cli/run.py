@@ -38,8 +38,8 @@ from .main import main
               help="Calibration: a Middlebury 2014 calib.txt or a KITTI "
                    "calib_cam_to_cam.txt of a rectified pair; or a raw rig, whose views "
                    "are rectified first: an OpenCV stereoCalibrate YAML/XML, a Kalibr "
-                   "camchain.yaml, or a ROS camera_info pair (--calib left.yaml --calib "
-                   "right.yaml). For --depth and --cloud, and the range.")
+                   "camchain.yaml, or a ROS camera_info or EuRoC sensor.yaml pair (--calib "
+                   "left.yaml --calib right.yaml). For --depth and --cloud, and the range.")
 @click.option("--alpha", type=ALPHA, default=0.0, show_default=True,
               help="Raw rigs: OpenCV's rectification alpha (0 keeps only valid pixels, "
                    "1 every source pixel).")
