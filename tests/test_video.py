@@ -138,3 +138,34 @@ def test_two_videos_of_different_frame_rates_are_refused(tmp_path, rng):
                     tmp_path / "d.avi", "--max-disp", 16)
     assert result.exit_code == 1 and "frames per second" in result.output, result.output
     assert not (tmp_path / "d.avi").exists()
+
+
+def test_two_folders_of_frames_paired_by_name(tmp_path, rng):
+    """cam0/ and cam1/ as EuRoC and ROS bag exports lay out a recording: frames paired
+    by name, the rate from their nanosecond time stamps; a frame without a partner is
+    counted as failed."""
+    write_videos(tmp_path, rng)
+    for name in ("left", "right"):
+        capture = cv2.VideoCapture(str(tmp_path / f"{name}.avi"))
+        folder = tmp_path / name
+        folder.mkdir()
+        k = 0
+        while True:
+            ok, frame = capture.read()
+            if not ok:
+                break
+            cv2.imwrite(str(folder / f"{1403715273262142976 + k * 50_000_000}.png"), frame)
+            k += 1
+        capture.release()
+    result = invoke("-v", "video", tmp_path / "left", tmp_path / "right", "-o",
+                    tmp_path / "d.avi", "--max-disp", 16, "--frames", tmp_path / "frames")
+    assert result.exit_code == 0, result.output
+    assert frame_count(tmp_path / "d.avi") == 4
+    assert cv2.VideoCapture(str(tmp_path / "d.avi")).get(cv2.CAP_PROP_FPS) == 20
+    disp = io.read_pfm(tmp_path / "frames" / "000003.pfm")
+    assert np.mean(np.abs(disp[8:-8, 24:-8] - 6) < 1) > 0.8
+    (tmp_path / "left" / "1403715273999999999.png").write_bytes(
+        (tmp_path / "left" / "1403715273262142976.png").read_bytes())
+    result = invoke("video", tmp_path / "left", tmp_path / "right", "-o",
+                    tmp_path / "e.avi", "--max-disp", 16)
+    assert result.exit_code == 1 and "1 frame without a partner" in result.output

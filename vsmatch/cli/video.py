@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 
 from .. import io
+from ..batch import IMAGE_EXTENSIONS
 from ..matcher import StereoMatcher
 from .common import (MAX_DISP, check_outputs, check_outside, config_option, echo, examples,
                      friendly_errors, verbose, verbosity_options)
@@ -33,6 +34,9 @@ def _open(source: str) -> cv2.VideoCapture:
     if camera and int(source) > MAX_CAMERA_INDEX:
         raise click.ClickException(f"{source}: no camera has this index (0..."
                                    f"{MAX_CAMERA_INDEX})")
+    if not camera and Path(source).is_dir():
+        raise click.ClickException(f"{source}: a folder; give two folders of frames (LEFT "
+                                   "and RIGHT, frames paired by name)")
     if not camera and not Path(source).is_file():
         raise click.ClickException(f"{source}: file not found")
     with io.native_stderr_silenced():
@@ -41,6 +45,51 @@ def _open(source: str) -> cv2.VideoCapture:
         what = "camera" if camera else "video"
         raise click.ClickException(f"{source}: cannot open this {what}")
     return capture
+
+
+class FolderFrames:
+    """A folder of frames as a video source (``read``, ``get``, ``release`` as
+    ``cv2.VideoCapture``): the image files given, in name order. Frames named by their
+    time stamp in nanoseconds (EuRoC, ROS bag exports) give the frame rate."""
+
+    def __init__(self, paths: list[Path], unpaired: str | None = None):
+        self.paths, self.unpaired, self.next = paths, unpaired, 0
+
+    def read(self):
+        if self.next >= len(self.paths):
+            return False, None
+        self.next += 1
+        return True, io.read_image(self.paths[self.next - 1])
+
+    def get(self, prop) -> float:
+        if prop != cv2.CAP_PROP_FPS:
+            return 0.0
+        stamps = [p.stem for p in self.paths]
+        if len(stamps) < 2 or not all(s.isdigit() and len(s) >= 16 for s in stamps):
+            return 0.0
+        step = float(np.median(np.diff([int(s) for s in stamps])))
+        return 1e9 / step if step > 0 else 0.0
+
+    def release(self) -> None:
+        pass
+
+
+def frame_folders(left: str, right: str) -> list[FolderFrames]:
+    """Two folders of frames (``cam0/``, ``cam1/``) paired by file name; the frames of
+    either without a partner in the other are named once the pairs are matched."""
+    def frames(folder):
+        return {p.name: p for p in Path(folder).iterdir()
+                if p.is_file() and p.suffix.lower() in IMAGE_EXTENSIONS}
+    lefts, rights = frames(left), frames(right)
+    common = sorted(lefts.keys() & rights.keys())
+    if not common:
+        raise click.ClickException(f"{left} and {right}: no frames of the same name")
+    alone = len(lefts.keys() ^ rights.keys())
+    unpaired = (None if not alone else f"{left} has {len(lefts)} frames, {right} "
+                f"{len(rights)}: {alone} frame{'s' if alone > 1 else ''} without a partner "
+                "of the same name, counted as failed")
+    return [FolderFrames([lefts[n] for n in common], unpaired),
+            FolderFrames([rights[n] for n in common])]
 
 
 class FramePairs:
@@ -143,7 +192,8 @@ def video_frame_count(path: str) -> int:
 @main.command(epilog=examples(
     "vsmatch video left.mp4 right.mp4 -o disparity.avi --calib stereo.yaml",
     "vsmatch video both.mp4 --side-by-side -o d.mp4 --frames frames/",
-    "vsmatch video 0 1 -o live.avi --calib stereo.yaml --config fast"))
+    "vsmatch video 0 1 -o live.avi --calib stereo.yaml --config fast",
+    "vsmatch video cam0/ cam1/ -o d.avi --calib cam0/sensor.yaml --calib cam1/sensor.yaml"))
 @click.argument("left")
 @click.argument("right", required=False)
 @click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
@@ -171,8 +221,9 @@ def video_frame_count(path: str) -> int:
 @friendly_errors
 def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_disp,
           min_disp, calib, max_frames, config):
-    """Match the frames of two videos (or of one side-by-side video, or of two cameras
-    given by index) and write the disparity as a colour video.
+    """Match the frames of two videos (or of one side-by-side video, of two cameras
+    given by index, or of two folders of frames paired by file name, as EuRoC's cam0/
+    and cam1/) and write the disparity as a colour video.
 
     Frames of one video without a partner in the other are counted as failed (exit 1).
     """
@@ -194,7 +245,8 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
             raise click.ClickException(str(exc)) from None
     stereo = StereoMatcher(max_disp=max_disp, min_disp=min_disp, config=config,
                            calib=list(calib) or None)
-    sources = [_open(name) for name in names]
+    folders = len(names) == 2 and all(Path(name).is_dir() for name in names)
+    sources = (frame_folders(*names) if folders else [_open(name) for name in names])
     _check_frame_rates(names, sources)
     fps = sources[0].get(cv2.CAP_PROP_FPS) or 10.0
     pairs = FramePairs(names, sources)
@@ -227,7 +279,8 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
                 io.write_atomic(out, lambda tmp: _write_or_refuse(
                     tmp, pictures(frames_folder), fps, out, left))
         stopped = max_frames is not None and count >= max_frames
-        unpaired = None if stopped else pairs.unpaired()
+        unpaired = None if stopped else (
+            sources[0].unpaired if folders else pairs.unpaired())
     finally:
         for source in sources:
             source.release()
