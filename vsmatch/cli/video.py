@@ -47,49 +47,40 @@ def _open(source: str) -> cv2.VideoCapture:
     return capture
 
 
-class FolderFrames:
-    """A folder of frames as a video source (``read``, ``get``, ``release`` as
-    ``cv2.VideoCapture``): the image files given, in name order. Frames named by their
-    time stamp in nanoseconds (EuRoC, ROS bag exports) give the frame rate."""
+class FolderPairs:
+    """Two folders of frames (``cam0/``, ``cam1/``) as a video: the frames of the same file
+    name, in name order, each pair read as ``vsmatch run`` reads one (16-bit frames keep
+    one scale). Frames named by their time stamp in nanoseconds (EuRoC, ROS bag exports)
+    give the frame rate."""
 
-    def __init__(self, paths: list[Path], unpaired: str | None = None):
-        self.paths, self.unpaired, self.next = paths, unpaired, 0
+    def __init__(self, left: str, right: str):
+        def frames(folder):
+            return {p.name: p for p in Path(folder).iterdir()
+                    if p.is_file() and p.suffix.lower() in IMAGE_EXTENSIONS}
+        lefts, rights = frames(left), frames(right)
+        self.names = sorted(lefts.keys() & rights.keys())
+        if not self.names:
+            raise click.ClickException(f"{left} and {right}: no frames of the same name")
+        self.paths = [(lefts[n], rights[n]) for n in self.names]
+        alone = len(lefts.keys() ^ rights.keys())
+        self._unpaired = None if not alone else (
+            f"{left} has {len(lefts)} frames, {right} {len(rights)}: {alone} frame"
+            f"{'s' if alone > 1 else ''} without a partner of the same name, counted as "
+            "failed")
 
-    def read(self):
-        if self.next >= len(self.paths):
-            return False, None
-        self.next += 1
-        return True, io.read_image(self.paths[self.next - 1])
+    def __iter__(self):
+        for left, right in self.paths:
+            yield io.read_pair(left, right)
 
-    def get(self, prop) -> float:
-        if prop != cv2.CAP_PROP_FPS:
-            return 0.0
-        stamps = [p.stem for p in self.paths]
+    def fps(self) -> float:
+        stamps = [Path(n).stem for n in self.names]
         if len(stamps) < 2 or not all(s.isdigit() and len(s) >= 16 for s in stamps):
             return 0.0
         step = float(np.median(np.diff([int(s) for s in stamps])))
         return 1e9 / step if step > 0 else 0.0
 
-    def release(self) -> None:
-        pass
-
-
-def frame_folders(left: str, right: str) -> list[FolderFrames]:
-    """Two folders of frames (``cam0/``, ``cam1/``) paired by file name; the frames of
-    either without a partner in the other are named once the pairs are matched."""
-    def frames(folder):
-        return {p.name: p for p in Path(folder).iterdir()
-                if p.is_file() and p.suffix.lower() in IMAGE_EXTENSIONS}
-    lefts, rights = frames(left), frames(right)
-    common = sorted(lefts.keys() & rights.keys())
-    if not common:
-        raise click.ClickException(f"{left} and {right}: no frames of the same name")
-    alone = len(lefts.keys() ^ rights.keys())
-    unpaired = (None if not alone else f"{left} has {len(lefts)} frames, {right} "
-                f"{len(rights)}: {alone} frame{'s' if alone > 1 else ''} without a partner "
-                "of the same name, counted as failed")
-    return [FolderFrames([lefts[n] for n in common], unpaired),
-            FolderFrames([rights[n] for n in common])]
+    def unpaired(self) -> str | None:
+        return self._unpaired
 
 
 class FramePairs:
@@ -245,11 +236,14 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
             raise click.ClickException(str(exc)) from None
     stereo = StereoMatcher(max_disp=max_disp, min_disp=min_disp, config=config,
                            calib=list(calib) or None)
-    folders = len(names) == 2 and all(Path(name).is_dir() for name in names)
-    sources = (frame_folders(*names) if folders else [_open(name) for name in names])
-    _check_frame_rates(names, sources)
-    fps = sources[0].get(cv2.CAP_PROP_FPS) or 10.0
-    pairs = FramePairs(names, sources)
+    if len(names) == 2 and all(Path(name).is_dir() for name in names):
+        sources, pairs = [], FolderPairs(*names)
+        fps = pairs.fps() or 10.0
+    else:
+        sources = [_open(name) for name in names]
+        _check_frame_rates(names, sources)
+        fps = sources[0].get(cv2.CAP_PROP_FPS) or 10.0
+        pairs = FramePairs(names, sources)
     count, start = 0, time.perf_counter()
     quiet = ctx.find_root().obj.get("quiet")
 
@@ -279,8 +273,7 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
                 io.write_atomic(out, lambda tmp: _write_or_refuse(
                     tmp, pictures(frames_folder), fps, out, left))
         stopped = max_frames is not None and count >= max_frames
-        unpaired = None if stopped else (
-            sources[0].unpaired if folders else pairs.unpaired())
+        unpaired = None if stopped else pairs.unpaired()
     finally:
         for source in sources:
             source.release()
