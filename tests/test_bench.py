@@ -26,7 +26,7 @@ def test_time_pairs_reports_each_config_and_sgbm_mode_per_scene():
     timing = result["scenes"]["synthetic"]
     assert all(timing[m]["seconds"] > 0 for m in result["methods"])
     assert {"cost", "aggregation", "wta"} <= set(timing["paper"]["stages"])
-    assert "refine" in timing["fast"]["stages"]  # fast searches a band at full size
+    assert "bands" in timing["fast"]["stages"]  # fast searches bands at full size
     total = result["total"]
     assert total["paper"]["x_sgbm-hh"] == timing["paper"]["seconds"] / timing["sgbm-hh"][
         "seconds"]

@@ -10,7 +10,7 @@ import reference
 def test_winner_takes_all_both_views(rng):
     volume = rng.random((7, 10, 4), dtype=np.float32)
     np.testing.assert_array_equal(disparity.winner_takes_all(volume), volume.argmin(axis=2))
-    np.testing.assert_array_equal(disparity.winner_takes_all_right(volume),
+    np.testing.assert_array_equal(disparity.winner_takes_all_both(volume)[1],
                                   reference.wta_right(volume))
 
 

@@ -9,6 +9,7 @@ import numpy as np
 from ._kernels.aggregate import sum_along_arms, sum_over_arms
 from ._kernels.arms import DOWN, LEFT, RIGHT, UP
 from ._kernels.arms import cross_arms as _cross_arms_kernel
+from .bands import Bands, of
 from .config import ArmsConfig
 from .images import as_channels, colour_change, downsample, mirrored, to_grey, upsample_nearest
 from .sensitivity import visual_sensitivity
@@ -70,14 +71,16 @@ def direct_is_faster(mean_arm: float, n_disp: int) -> bool:
 
 def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
                     *, iterations: int, scratch: np.ndarray | None = None,
-                    method: str = "auto") -> np.ndarray:
+                    method: str = "auto", bands: Bands | None = None) -> np.ndarray:
     """Average the cost over each pixel's cross support region, ``iterations`` times.
 
     The first iteration sums rows then columns, the next columns then rows, and so on.
     At disparity d each arm is the shorter of the left pixel's and the right pixel
-    (x - d)'s. ``volume`` is used as a work buffer and overwritten, as is ``scratch``, a
-    float32 volume of the same shape, if given. ``method``: one of
-    :data:`AGGREGATION_METHODS`; they agree to float32 rounding.
+    (x - d)'s, and with ``bands`` (the volume's candidates; default the whole range) the
+    region at d holds the pixels whose band holds d. ``volume`` is used as a work buffer
+    and overwritten, as is ``scratch``, a float32 volume of the same shape, if given.
+    ``method``: one of :data:`AGGREGATION_METHODS`; they agree to float32 rounding (bands
+    narrower than the range take direct sums).
     """
     if method not in AGGREGATION_METHODS:
         raise ValueError(f"aggregation method must be one of {AGGREGATION_METHODS}, "
@@ -87,16 +90,24 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
     # the result back over ``current``, so aggregation holds two volumes at most.
     if scratch is None:
         scratch = np.empty_like(current)
-    n_disp = current.shape[2]
-    arms_r_rev = mirrored(arms_r, pad=n_disp, fill=255)  # no right pixel: no limit
+    bands = of(current, bands)
+    narrow = not bands.is_full
+    arms_r_rev = mirrored(arms_r, pad=bands.n_disp, fill=255)  # no right pixel: no limit
     mean_arm = {True: float(arms_l[0].mean() + arms_l[1].mean()),
                 False: float(arms_l[2].mean() + arms_l[3].mean())}
+    # Narrow bands differ from pixel to pixel: the regions' sizes are counted.
+    sizes = np.empty(current.shape if narrow else (0, 0, 0), np.float32)
+    none = np.empty((0, 0, 0), np.float32)
 
     def one_pass(src, along_rows, normalise, out):
-        direct = (method == "direct" or method == "auto"
-                  and direct_is_faster(mean_arm[along_rows], n_disp))
-        if direct:
-            sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, out)
+        if narrow:
+            sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, bands.lo,
+                          bands.count, none if normalise else sizes,
+                          sizes if normalise else none, out)
+        elif method == "direct" or method == "auto" and direct_is_faster(
+                mean_arm[along_rows], bands.n_disp):
+            sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, bands.lo,
+                          bands.count, none, none, out)
         else:
             sum_along_arms(src, arms_l, arms_r_rev, along_rows, normalise, out)
 

@@ -32,6 +32,7 @@ import cv2
 import numpy as np
 
 from ._kernels.confidence import cost_curve, logistic
+from .bands import Bands, of
 from .disparity import VALID, MISMATCHED
 from .tiles import row_blocks
 
@@ -65,12 +66,15 @@ MAX_DISTANCE = 16.0
 DENSITIES = np.arange(1, 21) / 20.0
 
 
-def cost_curves(volume: np.ndarray, winners: np.ndarray) -> tuple[np.ndarray, ...]:
+def cost_curves(volume: np.ndarray, winners: np.ndarray, bands: Bands | None = None
+                ) -> tuple[np.ndarray, ...]:
     """Each pixel's best cost, second minimum at least 2 away, and mean cost over its
-    in-view candidates (float32 maps); ``disparity.winner_takes_all_with_curve`` gives
-    the same from its own pass."""
+    in-view candidates (of ``bands``, default the whole range; float32 maps);
+    ``disparity.winner_takes_all_with_curve`` gives the same from its own pass."""
+    bands = of(volume, bands)
     best, second, mean = (np.empty(volume.shape[:2], np.float32) for _ in range(3))
-    cost_curve(volume, np.ascontiguousarray(winners, dtype=np.int32), 1, best, second, mean)
+    cost_curve(volume, bands.lo, bands.count, np.ascontiguousarray(winners, dtype=np.int32),
+               1, best, second, mean)
     return best, second, mean
 
 

@@ -231,10 +231,10 @@ class PlanesConfig:
 class PyramidConfig:
     """Coarse-to-fine search (``vsmatch.pyramid``): halve the views while a row holds more
     than ``max_row_cells`` width x disparity cells, or the pair more than ``max_cells``
-    width x height x disparity cells (0: no such limit); at each finer level search the
-    coarse estimate's 3 x 3 range widened by ``band``, summing costs over crosses with arms
-    of at most ``support`` pixels; with ``scanline``, the scanline optimisation (the
-    ``scanline`` section's values) runs over those bands before the winner is taken."""
+    width x height x disparity cells (0: no such limit); at each finer level the method
+    runs over bands: the coarse estimate's 3 x 3 range widened by ``band`` (at most
+    ``max_band`` candidates), with arms of at most ``support`` pixels and, with
+    ``scanline``, the scanline optimisation (the ``scanline`` section's values)."""
 
     max_row_cells: int = _param(262144, 1024, 1 << 40, doc=(
         "Halve the views while a row holds more width × disparity cells."))
@@ -242,9 +242,12 @@ class PyramidConfig:
         "Halve at least once above this many width × height × disparity cells (0: no "
         "limit)."))
     scanline: bool = _param(False, doc=(
-        "Scanline optimisation over the bands at the finer levels."))
+        "Scanline optimisation at the finer levels (when the scanline stage is on)."))
     band: int = _param(0, 0, 64, doc="Pixels added on each side of a band.")
-    support: int = _param(8, 1, 255, doc="Longest arm of the band search's crosses, pixels.")
+    support: int = _param(8, 1, 255, doc="Longest arm at the finer levels, pixels.")
+    max_band: int = _param(8, 3, 4096, doc=(
+        "Most candidates a pixel keeps at a finer level; a wider 3 × 3 range is cut to "
+        "this many around the pixel's own estimate."))
     # Halve at least this many times, whatever the row (while 64 columns and 16
     # disparities remain): the ``fast`` config's coarse-to-fine at every size.
     min_levels: int = _param(0, 0, 4, doc="Halve at least this often, whatever the size.")

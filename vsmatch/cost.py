@@ -12,6 +12,7 @@ import numpy as np
 from ._kernels.census import census_transform as _census_kernel
 from ._kernels.cost import matching_cost_volume
 from . import volumes
+from .bands import Bands
 from .config import CostConfig
 from .images import as_channels, mirrored
 
@@ -106,9 +107,12 @@ def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
 def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
                 census_l: np.ndarray, census_r: np.ndarray,
                 grad_l: np.ndarray, grad_r: np.ndarray,
-                *, n_disp: int, cfg: CostConfig) -> np.ndarray:
-    """The matching cost volume ``(H, W, n_disp)`` float32 (ALGORITHM.md §2)."""
-    out = volumes.volume("cost", census_l.shape + (n_disp,))
+                *, n_disp: int, cfg: CostConfig, bands: Bands | None = None) -> np.ndarray:
+    """The matching cost volume ``(H, W, B)`` float32 (ALGORITHM.md §2) of each pixel's
+    candidates in ``bands`` (default: all ``n_disp`` of them, B = ``n_disp``)."""
+    if bands is None:
+        bands = Bands.full(census_l.shape, n_disp)
+    out = volumes.volume("cost", census_l.shape + (bands.width,))
     matching_cost_volume(*cost_terms(colour_l, colour_r, census_l, census_r, grad_l, grad_r,
-                                     cfg, planar=True), out)
+                                     cfg, planar=True), bands.lo, bands.count, out)
     return out

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._kernels import disparity as _k
+from .bands import Bands, of
 from .config import FillConfig
 from .images import as_channels
 
@@ -13,38 +14,43 @@ INVALID_DISPARITY = np.float32(np.inf)
 
 #: Labels of the left-right check.
 VALID, OCCLUDED, MISMATCHED = _k.VALID, _k.OCCLUDED, _k.MISMATCHED
+#: The winner of a pixel (either view) that has no candidate in its band.
+NO_DISPARITY = _k.NO_DISPARITY
 
 
-def winner_takes_all(volume: np.ndarray) -> np.ndarray:
-    """Left-view disparity ``argmin_d C(p, d)`` as int32 (H, W); ties take the smaller d."""
+def winner_takes_all(volume: np.ndarray, bands: Bands | None = None) -> np.ndarray:
+    """Left-view disparity ``argmin_d C(p, d)`` over each pixel's band (default: the whole
+    range) as int32 (H, W); ties take the smaller d; ``NO_DISPARITY`` without a band."""
+    bands = of(volume, bands)
     out = np.empty(volume.shape[:2], dtype=np.int32)
-    _k.winner_takes_all(volume, out)
+    _k.winner_takes_all(volume, bands.lo, bands.count, out)
     return out
 
 
-def winner_takes_all_right(volume: np.ndarray) -> np.ndarray:
-    """Right-view disparity ``argmin_d C((x + d, y), d)`` from the left volume, int32."""
-    return winner_takes_all_both(volume)[1]
-
-
-def winner_takes_all_both(volume: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`winner_takes_all` and :func:`winner_takes_all_right` in one pass."""
+def winner_takes_all_both(volume: np.ndarray, bands: Bands | None = None
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`winner_takes_all` of the left view and the right view's disparity
+    ``argmin_d C((x + d, y), d)`` (over the left pixels' bands) in one pass."""
+    bands = of(volume, bands)
     out_l = np.empty(volume.shape[:2], dtype=np.int32)
     out_r = np.empty(volume.shape[:2], dtype=np.int32)
     none = np.empty((0, 0), np.float32)
-    _k.winner_takes_all_both(volume, out_l, out_r, 1, none, none, none)
+    _k.winner_takes_all_both(volume, bands.lo, bands.count, out_l, out_r, 1, none, none, none)
     return out_l, out_r
 
 
-def winner_takes_all_with_curve(volume: np.ndarray, exclude: int = 1
+def winner_takes_all_with_curve(volume: np.ndarray, exclude: int = 1,
+                                bands: Bands | None = None
                                 ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, ...]]:
     """:func:`winner_takes_all_both`, and the left winners' cost curves (best, second
     minimum at least ``exclude + 1`` away, mean; see ``vsmatch.confidence``) from the
     same pass."""
+    bands = of(volume, bands)
     out_l = np.empty(volume.shape[:2], dtype=np.int32)
     out_r = np.empty(volume.shape[:2], dtype=np.int32)
     curve = tuple(np.empty(volume.shape[:2], np.float32) for _ in range(3))
-    _k.winner_takes_all_both(volume, out_l, out_r, int(exclude), *curve)
+    _k.winner_takes_all_both(volume, bands.lo, bands.count, out_l, out_r, int(exclude),
+                             *curve)
     return out_l, out_r, curve
 
 

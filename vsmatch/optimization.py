@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels.band import band_scanline as _band_scanline_kernel
 from ._kernels.scanline import scanline_columns, scanline_diagonal_pass, scanline_rows
+from .bands import Bands, of
 from .config import ScanlineConfig
 from .images import as_channels, colour_change, mirrored
 
@@ -15,9 +15,12 @@ COLUMN_CHUNK = 8
 
 
 def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
-                      cfg: ScanlineConfig, out: np.ndarray | None = None) -> np.ndarray:
-    """The mean of the directional path costs, (H, W, D): left, right, up, down, and with
-    ``directions: 8`` the four diagonals.
+                      cfg: ScanlineConfig, out: np.ndarray | None = None,
+                      bands: Bands | None = None) -> np.ndarray:
+    """The mean of the directional path costs, (H, W, B): left, right, up, down, and with
+    ``directions: 8`` the four diagonals, over the candidates of ``bands`` (the volume's;
+    default the whole range), a candidate outside the previous pixel's band being
+    infinitely costly there.
 
     P1 and P2 are divided by ``reduce_one`` where the colour changes by ``tau`` or more
     between a pixel and the previous one on the path in one image (left pixel, or its
@@ -25,23 +28,27 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
     ``out``, if given, is a work volume of the same shape to write the result into.
     """
     if out is None:
-        out = np.empty_like(volume)  # the first pass writes every cell
-    n_disp = volume.shape[2]
+        out = np.empty_like(volume)  # the first pass writes every cell of the bands
+    bands = of(volume, bands)
+    lo, count, n_disp = bands.lo, bands.count, bands.n_disp
     p1s, p2s = penalties(cfg)
     weight = np.float32(1.0 / cfg.directions)
     for along_rows in (True, False):
         change_l, change_r_rev = change_maps(left, right, cfg.tau, along_rows, n_disp)
         if along_rows:  # first: writes every cell of ``out``
-            scanline_rows(volume, change_l, change_r_rev, p1s, p2s, weight, True, out)
+            scanline_rows(volume, lo, count, change_l, change_r_rev, p1s, p2s, weight, True,
+                          out)
         else:
-            scanline_columns(volume, change_l, change_r_rev, p1s, p2s, weight, COLUMN_CHUNK,
+            scanline_columns(volume, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                             COLUMN_CHUNK,
                              out)
     if cfg.directions == 8:
         for step_x in (1, -1):
             change_l = diagonal_colour_change(left, cfg.tau, step_x)
             change_r_rev = mirrored(diagonal_colour_change(right, cfg.tau, step_x),
                                     pad=n_disp, fill=1)
-            scanline_diagonal_pass(volume, change_l, change_r_rev, p1s, p2s, step_x, weight,
+            scanline_diagonal_pass(volume, lo, count, change_l, change_r_rev, p1s, p2s, step_x,
+                                   weight,
                                    out)
     return out
 
@@ -74,18 +81,3 @@ def penalties(cfg: ScanlineConfig) -> tuple[np.ndarray, np.ndarray]:
     """P1 and P2 where 0, 1 or 2 of the views change colour (float32 arrays of three)."""
     divisors = np.array([1.0, cfg.reduce_one, cfg.reduce_both])
     return (cfg.p1 / divisors).astype(np.float32), (cfg.p2 / divisors).astype(np.float32)
-
-
-def band_scanline(agg: np.ndarray, agg_at: np.ndarray, first: np.ndarray, lo: np.ndarray,
-                  hi: np.ndarray, n_disp: int, left: np.ndarray, right: np.ndarray,
-                  cfg: ScanlineConfig) -> np.ndarray:
-    """:func:`scanline_optimise` over per-pixel bands (the coarse-to-fine level's): the
-    costs of pixel (y, x)'s candidates ``first .. `` at ``agg[agg_at[y, x]:]``, the
-    paths over ``lo .. hi``; the sums laid out as ``agg``. Rows and columns, both ways,
-    whatever ``cfg.directions``."""
-    p1s, p2s = penalties(cfg)
-    changes = [m for along_rows in (True, False)
-               for m in change_maps(left, right, cfg.tau, along_rows, n_disp)]
-    sums = np.zeros_like(agg)
-    _band_scanline_kernel(agg, agg_at, first, lo, hi, n_disp, *changes, p1s, p2s, sums)
-    return sums

@@ -14,6 +14,7 @@ import numpy as np
 
 from . import (aggregation, confidence, cost, disparity, noise, optimization, photometric, planes,
                pyramid, refinement, sensitivity, volumes)
+from .bands import Bands
 from .config import Config, CostConfig, load_config
 from .disparity import INVALID_DISPARITY
 from .images import downsample, to_grey, upsample_nearest
@@ -277,7 +278,8 @@ def _first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
 
 
 def _matching_costs(left: np.ndarray, right: np.ndarray, n_disp: int, cost_cfg: CostConfig,
-                    direction: bool = True) -> tuple[np.ndarray, tuple, tuple]:
+                    direction: bool = True, bands: Bands | None = None
+                    ) -> tuple[np.ndarray, tuple, tuple]:
     """The cost volume (ALGORITHM.md §1-2) and each view's gradient magnitude and
     direction (None unless ``direction``), which the arms need too."""
     grey_l, grey_r = to_grey(left), to_grey(right)
@@ -285,7 +287,7 @@ def _matching_costs(left: np.ndarray, right: np.ndarray, n_disp: int, cost_cfg: 
     sens_r = sensitivity.visual_sensitivity(grey_r, direction)
     volume = cost.cost_volume(left, right, cost.census_for(grey_l, cost_cfg),
                               cost.census_for(grey_r, cost_cfg), sens_l[0], sens_r[0],
-                              n_disp=n_disp, cfg=cost_cfg)
+                              n_disp=n_disp, cfg=cost_cfg, bands=bands)
     return volume, sens_l, sens_r
 
 
@@ -299,26 +301,26 @@ def _stage(seconds: dict[str, float], name: str):
 
 def _coarse_to_fine(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
                     levels: int) -> MatchResult:
-    """The full search ``levels`` pyramid levels down, then a band search at each level up."""
+    """The full search ``levels`` pyramid levels down, then at each level up the same
+    method over bands around twice the estimate below (``pyramid.bands_from_coarse``)."""
     if levels == 0:
         return _full_search_in_stripes(left, right, max_disp, cfg)
     small_l, small_r = downsample(left), downsample(right)
     _, coarse_max = pyramid.level_down(left.shape[1], max_disp)
     coarse = _coarse_to_fine(small_l, small_r, coarse_max, cfg, levels - 1)
+    with _stage(coarse.seconds, "bands"):
+        bands = pyramid.bands_from_coarse(coarse.disparity, coarse.labels, left.shape[:2],
+                                          max_disp, cfg.pyramid)
+    result = _full_search_in_stripes(left, right, max_disp, cfg, bands)
     seconds = dict(coarse.seconds)
-    with _stage(seconds, "refine"):
-        result = pyramid.refine(left, right, coarse.disparity, coarse.labels, max_disp, cfg)
-    if cfg.subpixel.median:
-        with _stage(seconds, "median"):
-            result = refinement.median3(result)
-    labels = None
-    if coarse.labels is not None:
-        labels = upsample_nearest(coarse.labels, left.shape[:2])
-    # The band search keeps no cost curves: the coarse level's stand for them.
+    for name, value in result.seconds.items():
+        seconds[name] = seconds.get(name, 0.0) + value
+    # A band's cost curve is short: the coarse level's, over the whole range, stand for it
+    # (the confidence is calibrated on whole-range curves).
     curve = {k: upsample_nearest(v, left.shape[:2]) for k, v in coarse.curve.items()}
-    return MatchResult(disparity=result, labels=labels, seconds=seconds, config=coarse.config,
-                       noise_sigma=coarse.noise_sigma, levels=coarse.levels + 1,
-                       stripes=coarse.stripes, curve=curve)
+    return MatchResult(disparity=result.disparity, labels=result.labels, seconds=seconds,
+                       config=coarse.config, noise_sigma=coarse.noise_sigma,
+                       levels=coarse.levels + 1, stripes=coarse.stripes, curve=curve)
 
 
 #: Bytes per pixel of the full search besides its two float32 cost volumes (census, arms,
@@ -341,16 +343,17 @@ def stripe_rows(width: int, n_disp: int, cfg: Config) -> int:
 
 
 def _full_search_in_stripes(left: np.ndarray, right: np.ndarray, max_disp: int,
-                            cfg: Config) -> MatchResult:
+                            cfg: Config, bands: Bands | None = None) -> MatchResult:
     """:func:`_full_search` on horizontal stripes that fit ``memory.max_mb``.
 
     The layout depends on the image size, the range and the config only, so results are
     the same on any machine; they differ from one piece near the seams (README).
     """
     height, width = left.shape[:2]
-    layout = stripe_layout(height, stripe_rows(width, max_disp + 1, cfg), cfg.memory.overlap)
+    depth = max_disp + 1 if bands is None else bands.width
+    layout = stripe_layout(height, stripe_rows(width, depth, cfg), cfg.memory.overlap)
     if len(layout) == 1:
-        return _full_search(left, right, max_disp, cfg)
+        return _full_search(left, right, max_disp, cfg, bands)
     noise_sigma = None
     if cfg.noise.adapt:  # once for the whole pair, as in one piece
         cfg, noise_sigma = noise.adapt_to_pair(cfg, left, right)
@@ -360,7 +363,8 @@ def _full_search_in_stripes(left: np.ndarray, right: np.ndarray, max_disp: int,
     curve = {name: np.empty((height, width), np.float32) for name in confidence.CURVE_FEATURES}
     seconds: dict[str, float] = {}
     for first, stop, core_first, core_stop in layout:
-        part = _full_search(left[first:stop], right[first:stop], max_disp, cfg)
+        part = _full_search(left[first:stop], right[first:stop], max_disp, cfg,
+                            None if bands is None else bands.rows(first, stop))
         core = slice(core_first - first, core_stop - first)
         disp[core_first:core_stop] = part.disparity[core]
         if part.labels is not None:
@@ -376,8 +380,9 @@ def _full_search_in_stripes(left: np.ndarray, right: np.ndarray, max_disp: int,
 
 
 def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
-                 cfg: Config) -> MatchResult:
-    """The stages in order, every pixel searching disparities ``0 .. max_disp``."""
+                 cfg: Config, bands: Bands | None = None) -> MatchResult:
+    """The stages in order, every pixel searching its band of ``0 .. max_disp`` (default:
+    the whole range)."""
     n_disp = int(max_disp) + 1
     seconds: dict[str, float] = {}
     stage = functools.partial(_stage, seconds)
@@ -393,38 +398,47 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
 
     with stage("cost"):
         volume, (grad_l, theta_l), (grad_r, theta_r) = _matching_costs(
-            left, right, n_disp, cfg.cost, direction=cfg.arms.kappa != 0)
+            left, right, n_disp, cfg.cost, direction=cfg.arms.kappa != 0, bands=bands)
 
+    arms_cfg = cfg.arms
+    scanline = cfg.scanline.enabled
+    if bands is not None and not bands.is_full:  # the finer levels' options
+        scanline = scanline and cfg.pyramid.scanline
+        support = cfg.pyramid.support
+        arms_cfg = dataclasses.replace(arms_cfg, l1=min(arms_cfg.l1, support),
+                                       l2=min(arms_cfg.l2, support))
     arms_l = arms_r = None
     if cfg.aggregation.iterations > 0 or cfg.voting.enabled:
         with stage("arms"):
-            arms_l = aggregation.cross_arms(left, theta_l, grad_l, cfg.arms)
+            arms_l = aggregation.cross_arms(left, theta_l, grad_l, arms_cfg)
             if cfg.aggregation.iterations > 0:
-                arms_r = aggregation.cross_arms(right, theta_r, grad_r, cfg.arms)
+                arms_r = aggregation.cross_arms(right, theta_r, grad_r, arms_cfg)
     # One work volume serves aggregation, then holds the scanline costs: the cost volume
     # is allocated twice, not three times (allocation is a measurable share of the time).
     work = volumes.volume("work", volume.shape)
     if cfg.aggregation.iterations > 0:
         with stage("aggregation"):
             volume = aggregation.aggregate_cross(volume, arms_l, arms_r, scratch=work,
-                                                 iterations=cfg.aggregation.iterations)
+                                                 iterations=cfg.aggregation.iterations,
+                                                 bands=bands)
 
     aggregated = volume
-    if cfg.scanline.enabled:
+    if scanline:
         with stage("scanline"):
             volume = optimization.scanline_optimise(volume, left, right, cfg.scanline,
-                                                    out=work)
+                                                    out=work, bands=bands)
 
     with stage("wta"):  # with the winners' cost curves, for the confidence
         if cfg.consistency.enabled:
-            disp_l, disp_r, curves = disparity.winner_takes_all_with_curve(volume)
+            disp_l, disp_r, curves = disparity.winner_takes_all_with_curve(volume,
+                                                                           bands=bands)
         else:
-            disp_l = disparity.winner_takes_all(volume)
-            curves = confidence.cost_curves(volume, disp_l)
+            disp_l = disparity.winner_takes_all(volume, bands)
+            curves = confidence.cost_curves(volume, disp_l, bands)
     with stage("confidence"):
         curve = confidence.curve_features(curves, arms_l)
         if aggregated is not volume:  # the same margin before the scanline optimisation
-            raw = confidence.cost_curves(aggregated, disp_l)
+            raw = confidence.cost_curves(aggregated, disp_l, bands)
             curve["raw_margin"] = confidence.curve_features(raw, None)["margin"]
         else:
             curve["raw_margin"] = curve["margin"]
@@ -445,15 +459,16 @@ def _full_search(left: np.ndarray, right: np.ndarray, max_disp: int,
                 result = disparity.mark_rejected(disp_l, labels)
     else:
         result = disp_l.astype(np.float32)
+        result[disp_l < 0] = INVALID_DISPARITY  # no candidate in the pixel's band
 
     if cfg.discontinuity.enabled:
         with stage("discontinuity"):
-            result = refinement.discontinuity_adjust(result, volume, cfg.discontinuity)
+            result = refinement.discontinuity_adjust(result, volume, cfg.discontinuity, bands)
     if cfg.subpixel.enabled:
         with stage("subpixel"):
             # The aggregated costs, not the scanline ones: the penalties flatten the cost
             # curve around the minimum (measured: fewer bad pixels at 0.5 and 1.0).
-            result = refinement.subpixel(result, aggregated, cfg.subpixel.fit)
+            result = refinement.subpixel(result, aggregated, cfg.subpixel.fit, bands)
     if cfg.subpixel.median:
         with stage("median"):
             result = refinement.median3(result)

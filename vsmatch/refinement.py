@@ -6,6 +6,7 @@ import cv2
 import numpy as np
 
 from ._kernels import refine as _k
+from .bands import Bands, of
 from .config import DiscontinuityConfig, VotingConfig
 
 
@@ -29,20 +30,25 @@ def region_vote(disp: np.ndarray, labels: np.ndarray, arms: np.ndarray, *, n_dis
 
 
 def discontinuity_adjust(disp: np.ndarray, volume: np.ndarray,
-                         cfg: DiscontinuityConfig) -> np.ndarray:
-    """Move disparity edges to where the matching cost puts them (float32)."""
+                         cfg: DiscontinuityConfig, bands: Bands | None = None) -> np.ndarray:
+    """Move disparity edges to where the matching cost puts them (float32); ``volume``
+    holds the candidates of ``bands`` (default: the whole range)."""
+    bands = of(volume, bands)
     out = np.empty(disp.shape, dtype=np.float32)
-    _k.discontinuity_adjust(np.ascontiguousarray(disp, dtype=np.float32), volume,
-                            float(cfg.jump), out)
+    _k.discontinuity_adjust(np.ascontiguousarray(disp, dtype=np.float32), volume, bands.lo,
+                            bands.count, float(cfg.jump), out)
     return out
 
 
-def subpixel(disp: np.ndarray, volume: np.ndarray, fit: str = "parabola") -> np.ndarray:
+def subpixel(disp: np.ndarray, volume: np.ndarray, fit: str = "parabola",
+             bands: Bands | None = None) -> np.ndarray:
     """Sub-pixel disparity by a fit through the costs around each integer disparity:
-    ``parabola`` or ``equiangular`` (:data:`SUBPIXEL_FITS`)."""
+    ``parabola`` or ``equiangular`` (:data:`SUBPIXEL_FITS`); ``volume`` holds the
+    candidates of ``bands`` (default: the whole range)."""
+    bands = of(volume, bands)
     out = np.empty(disp.shape, dtype=np.float32)
-    _k.subpixel_fit(np.ascontiguousarray(disp, dtype=np.float32), volume, fit_code(fit),
-                    out)
+    _k.subpixel_fit(np.ascontiguousarray(disp, dtype=np.float32), volume, bands.lo,
+                    bands.count, fit_code(fit), out)
     return out
 
 

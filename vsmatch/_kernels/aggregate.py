@@ -14,15 +14,17 @@ def _shorter(a, b):
 
 
 @njit(inline="always")
-def _arms_across(arms_l, arms_r_rev, first_lo, first_hi, y, x):
-    """The left pixel's two arms across the pass, and its right pixels' (over d)."""
-    start = arms_l.shape[2] - 1 - x  # width - 1 - x
+def _arms_across(arms_l, arms_r_rev, first_lo, first_hi, y, x, base):
+    """The left pixel's two arms across the pass, and its right pixels' (over d, from
+    disparity ``base`` on)."""
+    start = arms_l.shape[2] - 1 - x + base  # width - 1 - x + base
     return (arms_l[first_lo, y, x], arms_l[first_hi, y, x],
             arms_r_rev[first_lo, y, start:], arms_r_rev[first_hi, y, start:])
 
 
 @njit(**KERNEL_OPTIONS)
-def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, out):
+def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, counts_out,
+                  counts_in, out):
     """:func:`sum_along_arms` by direct sums: each pixel adds its arm pixels' costs.
 
     The work is proportional to the arm lengths rather than to one running sum per pixel,
@@ -32,52 +34,88 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, out):
     ``arms_r_rev`` is the right view's arms reversed along x and padded with 255:
     ``arms_r_rev[a, y, W - 1 - x + d]`` is arm ``a`` of right pixel (y, x - d), 255 (no
     limit) where x - d < 0, so the arms of the right pixels of x lie forward in memory.
+
+    Bands: ``src[y, x, k]`` is disparity ``lo[y, x] + k`` for ``k < count[y, x]``; an arm
+    pixel adds to the disparities its own band holds too. Where the bands differ, the
+    regions' sizes are counted as the sums are taken: the first pass writes them to
+    ``counts_out`` and the second divides by the sums of ``counts_in`` over its arms (empty
+    arrays: the whole range everywhere, every region's size known from the arms).
     """
-    height, width, n_disp = src.shape
+    height, width, depth = src.shape
     lo_arm = LEFT if along_rows else UP
     hi_arm = RIGHT if along_rows else DOWN
     first_lo = UP if along_rows else LEFT
     first_hi = DOWN if along_rows else RIGHT
     step_y = 1 - along_rows
     step_x = along_rows
+    count_here = counts_out.shape[0] > 0
+    counted = counts_in.shape[0] > 0
     for y in prange(height):
-        total = np.empty(n_disp, dtype=np.float32)
-        size = np.empty(n_disp, dtype=np.float32)
+        total = np.empty(depth, dtype=np.float32)
+        size = np.empty(depth, dtype=np.float32)
         for x in range(width):
+            base = np.int64(lo[y, x])
+            n = np.int64(count[y, x])
             centre = src[y, x]
-            for d in range(n_disp):
+            for d in range(n):
                 total[d] = centre[d]
-            if normalise:
+            if count_here:
+                for d in range(n):
+                    size[d] = np.float32(1.0)
+            elif counted:
+                for d in range(n):
+                    size[d] = counts_in[y, x, d]
+            elif normalise:
                 f_lo, f_hi, g_lo, g_hi = _arms_across(arms_l, arms_r_rev, first_lo, first_hi,
-                                                      y, x)
-                for d in range(n_disp):
+                                                      y, x, base)
+                for d in range(n):
                     size[d] = np.float32(1 + _shorter(f_lo, g_lo[d]) + _shorter(f_hi, g_hi[d]))
             for side in range(2):
                 arm = lo_arm if side == 0 else hi_arm
                 sign = -1 if side == 0 else 1
-                reach_r = arms_r_rev[arm, y, width - 1 - x:]
+                reach_r = arms_r_rev[arm, y, width - 1 - x + base:]
                 for k in range(1, np.int64(arms_l[arm, y, x]) + 1):
                     ny = y + sign * k * step_y
                     nx = x + sign * k * step_x
                     k32 = np.int32(k)
+                    # Candidate d of this pixel is candidate d + off of the neighbour's.
+                    off = base - np.int64(lo[ny, nx])
+                    first = max(np.int64(0), -off)
+                    stop = min(n, np.int64(count[ny, nx]) - off)
+                    if count_here:
+                        for d in range(first, stop):
+                            inside = k32 <= np.int32(reach_r[d])
+                            total[d] += src[ny, nx, d + off] if inside else np.float32(0.0)
+                            size[d] += np.float32(1.0) if inside else np.float32(0.0)
+                        continue
+                    if counted:
+                        for d in range(first, stop):
+                            inside = k32 <= np.int32(reach_r[d])
+                            total[d] += src[ny, nx, d + off] if inside else np.float32(0.0)
+                            size[d] += counts_in[ny, nx, d + off] if inside else np.float32(0.0)
+                        continue
                     neighbour = src[ny, nx]
-                    for d in range(n_disp):
+                    for d in range(first, stop):
                         inside = k32 <= np.int32(reach_r[d])
-                        total[d] += neighbour[d] if inside else np.float32(0.0)
+                        total[d] += neighbour[d + off] if inside else np.float32(0.0)
                     if normalise:
                         # The neighbour's first-pass region: its combined arms across.
                         f_lo, f_hi, g_lo, g_hi = _arms_across(arms_l, arms_r_rev, first_lo,
-                                                              first_hi, ny, nx)
-                        for d in range(n_disp):
+                                                              first_hi, ny, nx, base)
+                        for d in range(n):
                             inside = k32 <= np.int32(reach_r[d])
-                            n = np.float32(1 + _shorter(f_lo, g_lo[d]) + _shorter(f_hi, g_hi[d]))
-                            size[d] += n if inside else np.float32(0.0)
+                            s = np.float32(1 + _shorter(f_lo, g_lo[d]) + _shorter(f_hi, g_hi[d]))
+                            size[d] += s if inside else np.float32(0.0)
             result = out[y, x]
-            if normalise:
-                for d in range(n_disp):
+            if count_here:
+                sizes_out = counts_out[y, x]
+                for d in range(n):
+                    sizes_out[d] = size[d]
+            if (normalise or counted) and not count_here:
+                for d in range(n):
                     result[d] = total[d] / size[d]
             else:
-                for d in range(n_disp):
+                for d in range(n):
                     result[d] = total[d]
 
 
@@ -114,14 +152,14 @@ def sum_along_arms(src, arms_l, arms_r_rev, along_rows, normalise, out):
                 sums[i + 1, d] = sums[i, d] + src[y, x, d]
             if normalise:
                 f_lo, f_hi, g_lo, g_hi = _arms_across(arms_l, arms_r_rev, first_lo, first_hi,
-                                                      y, x)
+                                                      y, x, 0)
                 for d in range(n_disp):
                     counts[i + 1, d] = (counts[i, d] + 1 + _shorter(f_lo, g_lo[d])
                                         + _shorter(f_hi, g_hi[d]))
         for i in range(length):
             y = line * along_rows + i * (1 - along_rows)
             x = i * along_rows + line * (1 - along_rows)
-            a_lo, a_hi, r_lo, r_hi = _arms_across(arms_l, arms_r_rev, lo_arm, hi_arm, y, x)
+            a_lo, a_hi, r_lo, r_hi = _arms_across(arms_l, arms_r_rev, lo_arm, hi_arm, y, x, 0)
             result = out[y, x]
             for d in range(n_disp):
                 lo = i - _shorter(a_lo, r_lo[d])

@@ -29,16 +29,22 @@ def curve_at(costs, d1, inside, exclude):
 
 
 @njit(**KERNEL_OPTIONS)
-def cost_curve(volume, disp, exclude, out_best, out_second, out_mean):
+def cost_curve(volume, lo, count, disp, exclude, out_best, out_second, out_mean):
     """Per pixel, :func:`curve_at` of its cost curve ``volume[y, x, :]`` over the
-    candidates inside the right view (d <= x) and the chosen disparity ``disp[y, x]``.
-    The candidates outside the view hold the volume's largest cost: counting them would
-    make a curve of few candidates look sharp."""
-    height, width, n_disp = volume.shape
+    candidates of its band (``lo``, ``count``) inside the right view (d <= x) and the
+    chosen disparity ``disp[y, x]``. The candidates outside the view hold the volume's
+    largest cost: counting them would make a curve of few candidates look sharp. Zeros
+    where there is no such candidate or the chosen one is outside the band."""
+    height, width, _ = volume.shape
     for y in prange(height):
         for x in range(width):
-            best, second, mean = curve_at(volume[y, x], disp[y, x], min(n_disp, x + 1),
-                                          exclude)
+            base = np.int64(lo[y, x])
+            inside = min(np.int64(count[y, x]), x + 1 - base)
+            k = np.int64(disp[y, x]) - base
+            if inside <= 0 or k < 0 or k >= np.int64(count[y, x]):
+                out_best[y, x] = out_second[y, x] = out_mean[y, x] = 0.0
+                continue
+            best, second, mean = curve_at(volume[y, x], k, inside, exclude)
             out_best[y, x] = best
             out_second[y, x] = second
             out_mean[y, x] = mean

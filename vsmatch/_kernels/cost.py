@@ -1,3 +1,4 @@
+import numpy as np
 from numba import njit, prange
 
 from . import KERNEL_OPTIONS
@@ -6,8 +7,10 @@ from .census import popcount64
 
 @njit(**KERNEL_OPTIONS)
 def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, colour_r_rev,
-                         census_table, grad_table, ad_table, max_cost, out):
-    """C(p, d) = rho(Hamming) + rho(|G_L - G_R|) [+ rho(mean |I_L - I_R|)], layout (H, W, D).
+                         census_table, grad_table, ad_table, max_cost, lo, count, out):
+    """C(p, d) = rho(Hamming) + rho(|G_L - G_R|) [+ rho(mean |I_L - I_R|)], layout (H, W, B):
+    ``out[y, x, k]`` is the cost of disparity ``lo[y, x] + k`` for ``k < count[y, x]`` (the
+    pixel's band; the whole range is ``lo`` 0 and ``count`` D), ``max_cost`` past it.
 
     Every term is a table lookup: ``census_table[k]`` for k differing bits,
     ``grad_table[|g_L - g_R|]`` on gradients quantised to integers, ``ad_table[s]`` for the
@@ -24,10 +27,12 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
         for x in range(width):
             cl = census_l[y, x]
             gl = grad_l[y, x]
-            last = min(n_disp, x + 1)
+            base = np.int64(lo[y, x])
+            # Candidates k with a right pixel: x - (base + k) >= 0.
+            last = max(min(np.int64(count[y, x]), x + 1 - base), 0)
             # The right view comes reversed along x: right pixel x - d is at W - 1 - x + d,
-            # forward from x's place (and Numba knows these indexes are >= 0).
-            start = width - 1 - x
+            # forward from the band's first candidate (Numba knows these indexes are >= 0).
+            start = width - 1 - x + base
             census_r = census_r_rev[y, start:]
             grad_r = grad_r_rev[y, start:]
             costs = out[y, x]

@@ -21,53 +21,67 @@ def _argmin(costs, n_disp):
     return best
 
 
+#: A right pixel that no left pixel's band offers a candidate: fails every check.
+NO_DISPARITY = -(1 << 30)
+
+
 @njit(**KERNEL_OPTIONS)
-def winner_takes_all(volume, out):
-    """Left-view smallest-cost disparity per pixel: argmin_d volume[y, x, d]."""
-    height, width, n_disp = volume.shape
+def winner_takes_all(volume, lo, count, out):
+    """Left-view smallest-cost disparity per pixel over its band (``lo + argmin_k``);
+    :data:`NO_DISPARITY` where the band is empty."""
+    height, width, _ = volume.shape
     for y in prange(height):
         for x in range(width):
-            out[y, x] = _argmin(volume[y, x], n_disp)
+            n = np.int64(count[y, x])
+            out[y, x] = lo[y, x] + _argmin(volume[y, x], n) if n > 0 else NO_DISPARITY
 
 
 @njit(**KERNEL_OPTIONS)
-def winner_takes_all_both(volume, out_l, out_r, exclude, out_best, out_second, out_mean):
+def winner_takes_all_both(volume, lo, count, out_l, out_r, exclude, out_best, out_second,
+                          out_mean):
     """:func:`winner_takes_all` of both views in one pass over the volume, and, when the
     ``out_best``... arrays are not empty, each left pixel's :func:`curve_at` while its
     row is in cache (the confidence's; a second pass over the volume cost as much).
 
-    Right view: argmin_d volume[y, xr + d, d] over the d with xr + d inside the image; the
-    right view's candidates of right pixel xr sit on a diagonal, (xr + d, d); reading
-    the volume in memory order instead, cost (x, d) is offered to right pixel x - d. Each
-    right pixel sees its candidates in increasing d, so ties keep the smaller d there too.
-    The updates are written as selects, without branches, so that they vectorise.
+    Right view: argmin_d volume[y, xr + d, d] over the d with xr + d inside the image
+    whose band holds d; the right view's candidates of right pixel xr sit on a diagonal,
+    (xr + d, d); reading the volume in memory order instead, cost (x, d) is offered to
+    right pixel x - d. Each right pixel sees its candidates in increasing d, so ties keep
+    the smaller d there too; one offered nothing gets :data:`NO_DISPARITY`. The updates
+    are written as selects, without branches, so that they vectorise.
     """
-    height, width, n_disp = volume.shape
+    height, width, _ = volume.shape
+    n_disp = np.int64(lo.max() + count.max()) if lo.size else np.int64(1)
     curve = out_best.shape[0] > 0
     for y in prange(height):
-        best_r = np.empty(width + n_disp, dtype=volume.dtype)
-        best_rd = np.empty(width + n_disp, dtype=np.int32)
+        best_r = np.full(width + n_disp, np.inf, dtype=volume.dtype)
+        best_rd = np.full(width + n_disp, NO_DISPARITY, dtype=np.int32)
         # Reversed: right pixel xr is at width - 1 - xr, so x - d lies forward in memory.
         for x in range(width):
             costs = volume[y, x]
-            out_l[y, x] = _argmin(costs, n_disp)
-            # Views from x's place on: indexes that Numba knows are >= 0 stay affine.
-            cost_r = best_r[width - 1 - x:]
-            disp_r = best_rd[width - 1 - x:]
-            cost_r[0] = costs[0]
-            disp_r[0] = 0
-            for d in range(1, min(n_disp, x + 1)):
-                c = costs[d]
-                b = cost_r[d]
+            base = np.int64(lo[y, x])
+            n = np.int64(count[y, x])
+            out_l[y, x] = base + _argmin(costs, n) if n > 0 else NO_DISPARITY
+            # Views from the band's place on: indexes Numba knows are >= 0 stay affine.
+            cost_r = best_r[width - 1 - x + base:]
+            disp_r = best_rd[width - 1 - x + base:]
+            for k in range(min(n, x + 1 - base)):
+                c = costs[k]
+                b = cost_r[k]
                 take = c < b
-                cost_r[d] = c if take else b
-                disp_r[d] = np.int32(d) if take else disp_r[d]
+                cost_r[k] = c if take else b
+                disp_r[k] = np.int32(base + k) if take else disp_r[k]
         for x in range(width):
             out_r[y, x] = best_rd[width - 1 - x]
         if curve:  # the row's costs are still in cache; apart, the loop above vectorises
             for x in range(width):
-                best, second, mean = curve_at(volume[y, x], out_l[y, x],
-                                              min(n_disp, x + 1), exclude)
+                base = np.int64(lo[y, x])
+                inside = min(np.int64(count[y, x]), x + 1 - base)
+                if inside <= 0:
+                    out_best[y, x] = out_second[y, x] = out_mean[y, x] = 0.0
+                    continue
+                best, second, mean = curve_at(volume[y, x], out_l[y, x] - base, inside,
+                                              exclude)
                 out_best[y, x] = best
                 out_second[y, x] = second
                 out_mean[y, x] = mean
@@ -80,6 +94,9 @@ def left_right_check(disp_l, disp_r, n_disp, tolerance, labels):
     for y in prange(height):
         for x in range(width):
             d = disp_l[y, x]
+            if d < 0:  # no candidate in the pixel's band
+                labels[y, x] = OCCLUDED
+                continue
             if x - d >= 0 and abs(d - disp_r[y, x - d]) <= tolerance:
                 labels[y, x] = VALID
                 continue

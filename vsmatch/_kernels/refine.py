@@ -63,9 +63,10 @@ def region_vote(disp, labels, votes, run_end, arms, n_disp, min_votes, min_share
 
 
 @njit(**KERNEL_OPTIONS)
-def discontinuity_adjust(disp, volume, jump, out):
+def discontinuity_adjust(disp, volume, lo, count, jump, out):
     """On pixels where the disparity jumps by more than ``jump`` to a horizontal neighbour,
-    take the neighbour's disparity if its matching cost at this pixel is lower."""
+    take the neighbour's disparity if its matching cost at this pixel is lower (both
+    disparities in the pixel's band ``lo .. lo + count - 1``, the volume's candidates)."""
     height, width = disp.shape
     for y in prange(height):
         for x in range(width):
@@ -73,13 +74,19 @@ def discontinuity_adjust(disp, volume, jump, out):
             out[y, x] = d
             if not np.isfinite(d):
                 continue
-            best_cost = volume[y, x, int(d)]
+            base = np.int64(lo[y, x])
+            n = np.int64(count[y, x])
+            k = np.int64(d) - base
+            if k < 0 or k >= n:
+                continue
+            best_cost = volume[y, x, k]
             for nx in (x - 1, x + 1):
                 if nx < 0 or nx >= width:
                     continue
                 nd = disp[y, nx]
-                if np.isfinite(nd) and abs(nd - d) > jump:
-                    c = volume[y, x, int(nd)]
+                kn = np.int64(nd) - base if np.isfinite(nd) else np.int64(-1)
+                if np.isfinite(nd) and abs(nd - d) > jump and 0 <= kn < n:
+                    c = volume[y, x, kn]
                     if c < best_cost:
                         best_cost = c
                         out[y, x] = nd
@@ -112,18 +119,20 @@ def subpixel_offset(c0, c1, c2, fit):
 
 
 @njit(**KERNEL_OPTIONS)
-def subpixel_fit(disp, volume, fit, out):
+def subpixel_fit(disp, volume, lo, count, fit, out):
     """``disp`` moved to the minimum of the fit (:func:`subpixel_offset`) through the costs
-    at d - 1, d, d + 1 of each pixel's integer disparity d."""
-    height, width, n_disp = volume.shape
+    at d - 1, d, d + 1 of each pixel's integer disparity d, where all three are in its
+    band (``lo``, ``count``: the volume's candidates)."""
+    height, width, _ = volume.shape
     for y in prange(height):
         for x in range(width):
             d = disp[y, x]
             out[y, x] = d
             if not np.isfinite(d):
                 continue
-            k = int(d)
-            if k <= 0 or k >= n_disp - 1:
+            base = np.int64(lo[y, x])
+            k = np.int64(d) - base
+            if k <= 0 or k >= np.int64(count[y, x]) - 1:
                 continue
-            out[y, x] = k + subpixel_offset(volume[y, x, k - 1], volume[y, x, k],
+            out[y, x] = base + k + subpixel_offset(volume[y, x, k - 1], volume[y, x, k],
                                             volume[y, x, k + 1], fit)

@@ -74,59 +74,104 @@ _first_step, _next_step = _path_steps(False)
 _first_step_write, _next_step_write = _path_steps(True)
 
 
+@njit(inline="always")
+def _rebase(prev, tmp, off, n_prev, n):
+    """``prev``, the previous pixel's path costs at 1 + k over its band of ``n_prev``
+    candidates, re-indexed in place to this pixel's band of ``n``, whose candidate k is the
+    previous band's k + ``off``: infinite where the previous band has no such candidate,
+    for k from -1 to n (all that :func:`path_step` reads)."""
+    for j in range(-1, n + 1):
+        i = j + off
+        tmp[j + 1] = prev[i + 1] if 0 <= i < n_prev else np.float32(np.inf)
+    for j in range(n + 2):
+        prev[j] = tmp[j]
+
+
+@njit(inline="always")
+def _walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, write, y, x,
+               ey, ex, state, prev, cur, cur_bits, tmp, bits):
+    """One pixel (y, x) of a path; the edge crossed from the previous pixel is stored at
+    (ey, ex). ``state``: [previous band's lo, its count, the path's minimum as int32 bits;
+    count -1 before the path starts]. A pixel without a band restarts the path."""
+    width = lo.shape[1]
+    base = np.int64(lo[y, x])
+    n = np.int64(count[y, x])
+    if n <= 0:
+        state[1] = -1
+        return
+    src = cost[y, x]
+    dst = out[y, x]
+    if state[1] < 0:  # the path starts: its cost is the matching cost
+        if write:
+            new_min = _first_step_write(src, dst, cur, weight, n)
+        else:
+            new_min = _first_step(src, dst, cur, weight, n)
+    else:
+        if base != state[0] or n != state[1]:
+            _rebase(prev, tmp, base - state[0], state[1], n)
+        bits[0] = state[2]
+        m = bits.view(np.float32)[0]
+        cl = change_l[ey, ex]
+        change_r = change_r_rev[ey, width - 1 - ex + base:]
+        p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
+        if write:
+            new_min = _next_step_write(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
+                                       p2b, m, weight, n, bits)
+        else:
+            new_min = _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b,
+                                 m, weight, n, bits)
+    # Past the band's ends the path is infinite (an earlier, wider band may have left
+    # values there).
+    cur[0] = np.float32(np.inf)
+    cur[n + 1] = np.float32(np.inf)
+    state[0] = base
+    state[1] = n
+    bits.view(np.float32)[0] = new_min
+    state[2] = bits[0]
+
+
 @njit(**KERNEL_OPTIONS)
-def scanline_rows(cost, change_l, change_r_rev, p1s, p2s, weight, fresh, out):
+def scanline_rows(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, fresh, out):
     """Add ``weight`` x the path costs of both directions along every row.
 
     C_r(p, d) = C(p, d) + min(C_r(p-r, d), C_r(p-r, d+-1) + P1,
                               min_k C_r(p-r, k) + P2) - min_k C_r(p-r, k).
 
-    ``change_l[y, x]`` is 1 where the left image's colour changes by ``tau`` or more
-    between (y, x) and its predecessor along the pass ((y, x - 1) here, (y - 1, x) in
-    :func:`scanline_columns`; 1 where there is none). ``change_r_rev`` is the same map of
-    the right image, reversed along x and padded with ones: ``change_r_rev[y, W - 1 - x +
-    d]`` is the change at the right pixel (y, x - d) of (y, x), 1 where x - d < 0.
-    ``p1s[k]``, ``p2s[k]`` are the penalties where ``k`` (0, 1 or 2) of the two images
-    change. ``fresh``: ``out`` holds nothing yet; the first direction writes it rather
-    than adds.
+    ``cost[y, x, k]`` is the cost of disparity ``lo[y, x] + k`` for ``k < count[y, x]``
+    (the pixel's band; the whole range: ``lo`` 0, ``count`` D); a disparity outside the
+    previous pixel's band has an infinite path cost there. ``change_l[y, x]`` is 1 where
+    the left image's colour changes by ``tau`` or more between (y, x) and its predecessor
+    along the pass ((y, x - 1) here, (y - 1, x) in :func:`scanline_columns`; 1 where there
+    is none). ``change_r_rev`` is the same map of the right image, reversed along x and
+    padded with ones: ``change_r_rev[y, W - 1 - x + d]`` is the change at the right pixel
+    (y, x - d) of (y, x), 1 where x - d < 0. ``p1s[k]``, ``p2s[k]`` are the penalties where
+    ``k`` (0, 1 or 2) of the two images change. ``fresh``: ``out`` holds nothing yet; the
+    first direction writes it rather than adds.
     """
-    height, width, n_disp = cost.shape
+    height, width, depth = cost.shape
     for y in prange(height):
         # Two path-cost rows, used in turn as previous and current.
-        paths = np.full((2, n_disp + 2), np.inf, dtype=np.float32)
+        paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
         path_bits = paths.view(np.int32)
+        tmp = np.empty(depth + 2, dtype=np.float32)
         bits = np.empty(1, dtype=np.int32)
-        prev_min = np.float32(0.0)
+        state = np.empty(3, dtype=np.int64)
         for direction in (1, -1):
             write = fresh and direction == 1
             start = 0 if direction == 1 else width - 1
+            state[1] = -1
             for step in range(width):
                 x = start + direction * step
                 now = step % 2
-                if step == 0:
-                    if write:
-                        prev_min = _first_step_write(cost[y, x], out[y, x], paths[now], weight,
-                                                     n_disp)
-                    else:
-                        prev_min = _first_step(cost[y, x], out[y, x], paths[now], weight, n_disp)
-                    continue
                 # The edge crossed from the previous pixel: stored at the later of the two.
                 ex = x if direction == 1 else x + 1
-                cl = change_l[y, ex]
-                m = prev_min
-                src, dst, change_r = cost[y, x], out[y, x], change_r_rev[y, width - 1 - ex:]
-                prev, cur, cur_bits = paths[1 - now], paths[now], path_bits[now]
-                p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
-                if write:
-                    prev_min = _next_step_write(src, dst, prev, cur, cur_bits, change_r, p1a,
-                                                p1b, p2a, p2b, m, weight, n_disp, bits)
-                else:
-                    prev_min = _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b,
-                                          p2a, p2b, m, weight, n_disp, bits)
+                _walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                           write, y, x, y, ex, state, paths[1 - now], paths[now],
+                           path_bits[now], tmp, bits)
 
 
 @njit(**KERNEL_OPTIONS)
-def scanline_columns(cost, change_l, change_r_rev, p1s, p2s, weight, chunk, out):
+def scanline_columns(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, chunk, out):
     """:func:`scanline_rows` down and up every column, adding to ``out``.
 
     The columns go in chunks of ``chunk``, walked side by side a row at a time: each step
@@ -134,43 +179,40 @@ def scanline_columns(cost, change_l, change_r_rev, p1s, p2s, weight, chunk, out)
     read one pixel a row (measured on the twelve standard pairs: 0.6-0.7x the time). Each
     column's sums are its own, so the chunk size does not change the result.
     """
-    height, width, n_disp = cost.shape
+    height, width, depth = cost.shape
     n_chunks = (width + chunk - 1) // chunk
     for c in prange(n_chunks):
         x0 = c * chunk
         n = min(width, x0 + chunk) - x0
-        prev = np.full((n, n_disp + 2), np.inf, dtype=np.float32)
-        cur = np.full((n, n_disp + 2), np.inf, dtype=np.float32)
-        prev_min = np.zeros(n, dtype=np.float32)
+        prev = np.full((n, depth + 2), np.inf, dtype=np.float32)
+        cur = np.full((n, depth + 2), np.inf, dtype=np.float32)
+        tmp = np.empty(depth + 2, dtype=np.float32)
         bits = np.empty(1, dtype=np.int32)
+        states = np.empty((n, 3), dtype=np.int64)
         for direction in (1, -1):
+            states[:, 1] = -1
             for step in range(height):
                 y = step if direction == 1 else height - 1 - step
                 ey = y if direction == 1 else y + 1  # the edge crossed, at the later row
                 cur_bits = cur.view(np.int32)
                 for k in range(n):
                     x = x0 + k
-                    if step == 0:
-                        prev_min[k] = _first_step(cost[y, x], out[y, x], cur[k], weight, n_disp)
-                        continue
-                    cl = change_l[ey, x]
-                    m = prev_min[k]
-                    prev_min[k] = _next_step(cost[y, x], out[y, x], prev[k], cur[k], cur_bits[k],
-                                             change_r_rev[ey, width - 1 - x:], p1s[cl],
-                                             p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1], m, weight,
-                                             n_disp, bits)
+                    _walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                               False, y, x, ey, x, states[k], prev[k], cur[k], cur_bits[k],
+                               tmp, bits)
                 prev, cur = cur, prev
 
 
 @njit(**KERNEL_OPTIONS)
-def scanline_diagonal_pass(cost, change_l, change_r_rev, p1s, p2s, step_x, weight, out):
+def scanline_diagonal_pass(cost, lo, count, change_l, change_r_rev, p1s, p2s, step_x, weight,
+                           out):
     """:func:`scanline_rows` along the diagonals that step (1, ``step_x``), both ways, adding.
 
     ``change_l[y, x]``: 1 where the colour changes by ``tau`` or more between (y, x) and
     (y - 1, x - step_x), and where there is no such pixel; ``change_r_rev`` the same of the
     right image, reversed along x and padded with ones.
     """
-    height, width, n_disp = cost.shape
+    height, width, depth = cost.shape
     n_lines = height + width - 1
     for index in prange(n_lines):
         line = np.int64(index)  # prange's index may be unsigned: keep the sums signed
@@ -181,26 +223,22 @@ def scanline_diagonal_pass(cost, change_l, change_r_rev, p1s, p2s, step_x, weigh
             y0, x0 = line - width + 1, 0 if step_x == 1 else width - 1
         room_x = width - 1 - x0 if step_x == 1 else x0
         length = min(height - y0, room_x + 1)
-        paths = np.full((2, n_disp + 2), np.inf, dtype=np.float32)
+        paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
         path_bits = paths.view(np.int32)
+        tmp = np.empty(depth + 2, dtype=np.float32)
         bits = np.empty(1, dtype=np.int32)
-        prev_min = np.float32(0.0)
+        state = np.empty(3, dtype=np.int64)
         for direction in (1, -1):
             start = 0 if direction == 1 else length - 1
+            state[1] = -1
             for step in range(length):
                 i = start + direction * step
                 y = y0 + i
                 x = x0 + i * step_x
                 now = step % 2
-                if step == 0:
-                    prev_min = _first_step(cost[y, x], out[y, x], paths[now], weight, n_disp)
-                    continue
                 # The edge crossed is stored at the later pixel of the two, top to bottom.
                 ey = y if direction == 1 else y + 1
                 ex = x if direction == 1 else x + step_x
-                cl = change_l[ey, ex]
-                m = prev_min
-                prev_min = _next_step(cost[y, x], out[y, x], paths[1 - now], paths[now],
-                                      path_bits[now], change_r_rev[ey, width - 1 - ex:],
-                                      p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1],
-                                      m, weight, n_disp, bits)
+                _walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                           False, y, x, ey, ex, state, paths[1 - now], paths[now],
+                           path_bits[now], tmp, bits)

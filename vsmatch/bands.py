@@ -1,0 +1,66 @@
+"""Each pixel's candidate disparities: a band ``lo .. lo + count - 1`` of the range.
+
+Every stage of the method works on bands: a volume holds ``width`` candidates a pixel,
+candidate k of pixel p being disparity ``lo[p] + k`` for ``k < count[p]``. The full
+search is the band ``0 .. D - 1`` at every pixel (:meth:`Bands.full`); coarse-to-fine and
+video search narrow bands around an earlier estimate (:func:`around`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Bands:
+    """Candidates ``lo .. lo + count - 1`` (int32 (H, W) each) of a range ``0 .. n_disp - 1``;
+    at most ``width`` a pixel (the depth of the volumes). ``count`` 0: no candidate."""
+
+    lo: np.ndarray
+    count: np.ndarray
+    width: int
+    n_disp: int
+
+    @classmethod
+    def full(cls, shape: tuple[int, int], n_disp: int) -> "Bands":
+        """The whole range at every pixel."""
+        return cls(np.zeros(shape, np.int32), np.full(shape, n_disp, np.int32), n_disp, n_disp)
+
+    @property
+    def is_full(self) -> bool:
+        return self.width == self.n_disp and not self.lo.any()
+
+    def rows(self, first: int, stop: int) -> "Bands":
+        """The bands of rows ``first .. stop - 1``."""
+        return Bands(np.ascontiguousarray(self.lo[first:stop]),
+                     np.ascontiguousarray(self.count[first:stop]), self.width, self.n_disp)
+
+    def columns(self, keep: slice) -> "Bands":
+        return Bands(np.ascontiguousarray(self.lo[:, keep]),
+                     np.ascontiguousarray(self.count[:, keep]), self.width, self.n_disp)
+
+
+def of(volume: np.ndarray, bands: Bands | None) -> Bands:
+    """``bands``, or the whole range of ``volume`` (H, W, D) when None."""
+    return Bands.full(volume.shape[:2], volume.shape[2]) if bands is None else bands
+
+
+def around(low: np.ndarray, high: np.ndarray, centre: np.ndarray, n_disp: int,
+           width: int) -> Bands:
+    """Bands holding ``low .. high`` (float arrays, per pixel; rounded outwards) within the
+    range ``0 .. n_disp - 1``; where that is more than ``width`` candidates, the ``width``
+    centred on ``centre``; none where ``low``, ``high`` or ``centre`` is not finite."""
+    known = np.isfinite(low) & np.isfinite(high) & np.isfinite(centre)
+    low = np.where(known, low, 0)
+    high = np.where(known, high, 0)
+    lo = np.clip(np.floor(low), 0, n_disp - 1)
+    hi = np.clip(np.ceil(high), 0, n_disp - 1)
+    count = hi - lo + 1
+    wide = count > width
+    middle = np.round(np.where(known, centre, 0)) - width // 2
+    lo = np.where(wide, np.clip(middle, 0, max(n_disp - width, 0)), lo)
+    count = np.where(wide, min(width, n_disp), count)
+    count[~known] = 0
+    return Bands(lo.astype(np.int32), count.astype(np.int32), int(min(width, n_disp)), n_disp)
