@@ -92,12 +92,15 @@ def _regions_by_hand(volume, arms_l, arms_r, lo, count):
 
 
 def test_aggregation_over_bands_sums_the_regions_pixels_that_hold_d(rng):
-    height, width, n_disp = 10, 14, 9
+    """Bands of up to 9 candidates in a volume 9 deep, where most neighbours' bands start
+    together (the common case, summed a vector at a time) and some do not."""
+    height, width, n_disp = 10, 14, 16
     full = rng.random((height, width, n_disp)).astype(np.float32)
-    lo = rng.integers(0, 6, size=(height, width)).astype(np.int32)
-    count = np.minimum(rng.integers(1, 5, size=(height, width)), n_disp - lo).astype(np.int32)
-    bands = Bands(lo, count, 4, n_disp)
-    banded = np.zeros((height, width, 4), np.float32)
+    lo = np.where(rng.random((height, width)) < 0.7, 3,
+                  rng.integers(0, 8, size=(height, width))).astype(np.int32)
+    count = np.minimum(rng.integers(1, 10, size=(height, width)), n_disp - lo).astype(np.int32)
+    bands = Bands(lo, count, 9, n_disp)
+    banded = np.zeros((height, width, 9), np.float32)
     for y in range(height):
         for x in range(width):
             banded[y, x, :count[y, x]] = full[y, x, lo[y, x]:lo[y, x] + count[y, x]]
@@ -109,6 +112,37 @@ def test_aggregation_over_bands_sums_the_regions_pixels_that_hold_d(rng):
         for x in range(width):
             np.testing.assert_allclose(got[y, x, :count[y, x]],
                                        want[y, x, lo[y, x]:lo[y, x] + count[y, x]], rtol=1e-5)
+
+
+def test_scanline_over_bands_is_the_scanline_with_the_rest_infinite(rng):
+    """A band's path is the whole range's with every cost outside the bands infinite:
+    narrow bands (a vector at a time), wider ones, starts that move from pixel to pixel."""
+    height, width, n_disp = 11, 17, 16
+    full = rng.random((height, width, n_disp)).astype(np.float32) * 3
+    lo = np.where(rng.random((height, width)) < 0.6, 4,
+                  rng.integers(0, 8, size=(height, width))).astype(np.int32)
+    count = np.minimum(rng.integers(1, 10, size=(height, width)), n_disp - lo).astype(np.int32)
+    inside = np.zeros(full.shape, bool)
+    banded = np.zeros((height, width, 9), np.float32)
+    for y in range(height):
+        for x in range(width):
+            inside[y, x, lo[y, x]:lo[y, x] + count[y, x]] = True
+            banded[y, x, :count[y, x]] = full[y, x, lo[y, x]:lo[y, x] + count[y, x]]
+    left = rng.integers(0, 60, size=(height, width, 3), dtype=np.uint8)
+    right = rng.integers(0, 60, size=(height, width, 3), dtype=np.uint8)
+    for directions in (4, 8):
+        cfg = config_from_dict({"scanline": {"p1": 0.5, "p2": 1.7, "tau": 20,
+                                             "directions": directions}},
+                               base=load_config(None)).scanline
+        want = optimization.scanline_optimise(np.where(inside, full, np.inf).astype(np.float32),
+                                              left, right, cfg)
+        got = optimization.scanline_optimise(banded, left, right, cfg,
+                                             bands=Bands(lo, count, 9, n_disp))
+        for y in range(height):
+            for x in range(width):
+                np.testing.assert_allclose(got[y, x, :count[y, x]],
+                                           want[y, x, lo[y, x]:lo[y, x] + count[y, x]],
+                                           rtol=1e-5)
 
 
 def test_winners_over_bands_by_hand(rng):

@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from ._kernels.aggregate import sum_along_arms, sum_over_arms
+from ._kernels.aggregate import LANES, sum_along_arms, sum_over_arms
 from ._kernels.arms import DOWN, LEFT, RIGHT, UP
 from ._kernels.arms import cross_arms as _cross_arms_kernel
 from .bands import Bands, of
@@ -92,7 +92,8 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
         scratch = np.empty_like(current)
     bands = of(current, bands)
     narrow = not bands.is_full
-    arms_r_rev = mirrored(arms_r, pad=bands.n_disp, fill=255)  # no right pixel: no limit
+    # No right pixel: no limit; LANES more, read past a band's end.
+    arms_r_rev = mirrored(arms_r, pad=bands.n_disp + LANES, fill=255)
     mean_arm = {True: float(arms_l[0].mean() + arms_l[1].mean()),
                 False: float(arms_l[2].mean() + arms_l[3].mean())}
     # Narrow bands differ from pixel to pixel: the regions' sizes are counted.

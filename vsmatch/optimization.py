@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels.scanline import scanline_columns, scanline_diagonal_pass, scanline_rows
+from ._kernels.scanline import LANES, scanline_columns, scanline_diagonal_pass, scanline_rows
 from .bands import Bands, of
 from .config import ScanlineConfig
 from .images import as_channels, colour_change, mirrored
@@ -31,25 +31,25 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
         out = np.empty_like(volume)  # the first pass writes every cell of the bands
     bands = of(volume, bands)
     lo, count, n_disp = bands.lo, bands.count, bands.n_disp
+    banded = not bands.is_full
     p1s, p2s = penalties(cfg)
     weight = np.float32(1.0 / cfg.directions)
     for along_rows in (True, False):
-        change_l, change_r_rev = change_maps(left, right, cfg.tau, along_rows, n_disp)
+        # LANES more: a narrow band's step reads that far.
+        change_l, change_r_rev = change_maps(left, right, cfg.tau, along_rows, n_disp + LANES)
         if along_rows:  # first: writes every cell of ``out``
-            scanline_rows(volume, lo, count, change_l, change_r_rev, p1s, p2s, weight, True,
+            scanline_rows(volume, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight, True,
                           out)
         else:
-            scanline_columns(volume, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                             COLUMN_CHUNK,
-                             out)
+            scanline_columns(volume, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight,
+                             COLUMN_CHUNK, out)
     if cfg.directions == 8:
         for step_x in (1, -1):
             change_l = diagonal_colour_change(left, cfg.tau, step_x)
             change_r_rev = mirrored(diagonal_colour_change(right, cfg.tau, step_x),
-                                    pad=n_disp, fill=1)
-            scanline_diagonal_pass(volume, lo, count, change_l, change_r_rev, p1s, p2s, step_x,
-                                   weight,
-                                   out)
+                                    pad=n_disp + LANES, fill=1)
+            scanline_diagonal_pass(volume, lo, count, banded, change_l, change_r_rev, p1s, p2s,
+                                   step_x, weight, out)
     return out
 
 

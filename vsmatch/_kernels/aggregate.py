@@ -13,6 +13,10 @@ def _shorter(a, b):
     return a if a < b else b
 
 
+#: Candidates summed at once where bands are narrow: one vector of float32.
+LANES = 8
+
+
 @njit(inline="always")
 def _arms_across(arms_l, arms_r_rev, first_lo, first_hi, y, x, base):
     """The left pixel's two arms across the pass, and its right pixels' (over d, from
@@ -50,20 +54,26 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
     step_x = along_rows
     count_here = counts_out.shape[0] > 0
     counted = counts_in.shape[0] > 0
+    # Bands of at most LANES candidates in a volume at least as deep: summed LANES at a
+    # time, the lanes past a band unused.
+    narrow = (count_here or counted) and depth >= LANES
     for y in prange(height):
-        total = np.empty(depth, dtype=np.float32)
-        size = np.empty(depth, dtype=np.float32)
+        total = np.zeros(max(depth, LANES), dtype=np.float32)
+        size = np.ones(max(depth, LANES), dtype=np.float32)
         for x in range(width):
             base = np.int64(lo[y, x])
             n = np.int64(count[y, x])
+            lanes = narrow and n <= LANES
             centre = src[y, x]
-            for d in range(n):
+            # With lanes every lane is written, those past the band too (finite, unused).
+            span = LANES if lanes else n
+            for d in range(span):
                 total[d] = centre[d]
             if count_here:
-                for d in range(n):
+                for d in range(span):
                     size[d] = np.float32(1.0)
             elif counted:
-                for d in range(n):
+                for d in range(span):
                     size[d] = counts_in[y, x, d]
             elif normalise:
                 f_lo, f_hi, g_lo, g_hi = _arms_across(arms_l, arms_r_rev, first_lo, first_hi,
@@ -82,6 +92,21 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
                     off = base - np.int64(lo[ny, nx])
                     first = max(np.int64(0), -off)
                     stop = min(n, np.int64(count[ny, nx]) - off)
+                    if lanes and off == 0 and count_here:  # the common case: one vector
+                        row = src[ny, nx]
+                        for d in range(LANES):
+                            inside = (k32 <= np.int32(reach_r[d])) & (d < stop)
+                            total[d] += row[d] if inside else np.float32(0.0)
+                            size[d] += np.float32(1.0) if inside else np.float32(0.0)
+                        continue
+                    if lanes and off == 0:
+                        row = src[ny, nx]
+                        sizes = counts_in[ny, nx]
+                        for d in range(LANES):
+                            inside = (k32 <= np.int32(reach_r[d])) & (d < stop)
+                            total[d] += row[d] if inside else np.float32(0.0)
+                            size[d] += sizes[d] if inside else np.float32(0.0)
+                        continue
                     if count_here:
                         for d in range(first, stop):
                             inside = k32 <= np.int32(reach_r[d])
@@ -109,13 +134,13 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
             result = out[y, x]
             if count_here:
                 sizes_out = counts_out[y, x]
-                for d in range(n):
+                for d in range(span):
                     sizes_out[d] = size[d]
             if (normalise or counted) and not count_here:
-                for d in range(n):
+                for d in range(span):
                     result[d] = total[d] / size[d]
             else:
-                for d in range(n):
+                for d in range(span):
                     result[d] = total[d]
 
 

@@ -67,11 +67,78 @@ def _path_steps(write):
         bits[0] = smallest
         return bits.view(np.float32)[0]
 
-    return first_step, next_step
+    @njit(inline="always")
+    def first_lanes(src, dst, cur, weight, valid):
+        """:func:`first_step` over :data:`LANES` candidates, those from ``valid`` on
+        outside the band: infinite."""
+        new_min = np.float32(np.inf)
+        for d in range(LANES):
+            v = src[d] if d < valid else np.float32(np.inf)
+            cur[d + 1] = v
+            if write:
+                dst[d] = weight * v
+            else:
+                dst[d] += weight * v
+            new_min = v if v < new_min else new_min
+        return new_min
+
+    @njit(inline="always")
+    def next_lanes(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, prev_min,
+                   weight, valid, bits):
+        """:func:`next_step` over :data:`LANES` candidates, those from ``valid`` on outside
+        the band: infinite. One vector where a band's short loop would not vectorise."""
+        for d in range(LANES):
+            c = change_r[d]
+            v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - prev_min
+            v = v if d < valid else np.float32(np.inf)
+            cur[d + 1] = v
+            if write:
+                dst[d] = weight * v
+            else:
+                dst[d] += weight * v
+        smallest = cur_bits[1]
+        for d in range(LANES):
+            b = cur_bits[d + 1]
+            smallest = b if b < smallest else smallest
+        bits[0] = smallest
+        return bits.view(np.float32)[0]
+
+    return first_step, next_step, first_lanes, next_lanes
 
 
-_first_step, _next_step = _path_steps(False)
-_first_step_write, _next_step_write = _path_steps(True)
+#: Candidates a narrow band's path step takes at once: one vector of float32.
+LANES = 8
+
+_first_step, _next_step, _first_lanes, _next_lanes = _path_steps(False)
+(_first_step_write, _next_step_write, _first_lanes_write,
+ _next_lanes_write) = _path_steps(True)
+
+
+@njit(inline="always")
+def _lanes_step(src, dst, change_l, change_r_rev, p1s, p2s, weight, write, ey, ex, width, base,
+                n,
+                prev_lo, prev_n, m, prev, cur, cur_bits, tmp, bits):
+    """A band of at most :data:`LANES` candidates' path step (``_walk_steps``' step)."""
+    if prev_n < 0:
+        if write:
+            new_min = _first_lanes_write(src, dst, cur, weight, n)
+        else:
+            new_min = _first_lanes(src, dst, cur, weight, n)
+    else:
+        if base != prev_lo or n != prev_n:
+            _rebase(prev, tmp, base - prev_lo, prev_n, max(n, np.int64(LANES)))
+        cl = change_l[ey, ex]
+        change_r = change_r_rev[ey, width - 1 - ex + base:]
+        p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
+        if write:
+            new_min = _next_lanes_write(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
+                                        p2b, m, weight, n, bits)
+        else:
+            new_min = _next_lanes(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b,
+                                  m, weight, n, bits)
+    cur[0] = np.float32(np.inf)
+    cur[LANES + 1] = np.float32(np.inf)
+    return base, n, new_min
 
 
 @njit(inline="always")
@@ -87,51 +154,75 @@ def _rebase(prev, tmp, off, n_prev, n):
         prev[j] = tmp[j]
 
 
+def _walk_steps(banded):
+    """One pixel's step of a path, compiled for bands (``banded``) or for the whole range
+    at every pixel, where the band bookkeeping is left out of the loops' way."""
+
+    @njit(inline="always")
+    def walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, write, y, x,
+                  ey, ex, prev_lo, prev_n, m, prev, cur, cur_bits, tmp, bits):
+        """Pixel (y, x) of a path; the edge crossed from the previous pixel is stored at
+        (ey, ex); the previous pixel's band was ``prev_lo``, ``prev_n`` (-1 before the
+        path starts) and its path minimum ``m``. Returns this pixel's three. A pixel
+        without a band restarts the path."""
+        width = lo.shape[1]
+        base = np.int64(lo[y, x]) if banded else np.int64(0)
+        n = np.int64(count[y, x]) if banded else np.int64(cost.shape[2])
+        if banded and n <= 0:
+            return base, np.int64(-1), m
+        src = cost[y, x]
+        dst = out[y, x]
+        if banded and n <= LANES and cost.shape[2] >= LANES:
+            return _lanes_step(src, dst, change_l, change_r_rev, p1s, p2s, weight, write, ey,
+                               ex, width, base, n, prev_lo, prev_n, m, prev, cur, cur_bits,
+                               tmp, bits)
+        if prev_n < 0:  # the path starts: its cost is the matching cost
+            if write:
+                new_min = _first_step_write(src, dst, cur, weight, n)
+            else:
+                new_min = _first_step(src, dst, cur, weight, n)
+        else:
+            if banded and (base != prev_lo or n != prev_n):
+                _rebase(prev, tmp, base - prev_lo, prev_n, n)
+            cl = change_l[ey, ex]
+            change_r = change_r_rev[ey, width - 1 - ex + base:]
+            p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
+            if write:
+                new_min = _next_step_write(src, dst, prev, cur, cur_bits, change_r, p1a, p1b,
+                                           p2a, p2b, m, weight, n, bits)
+            else:
+                new_min = _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
+                                     p2b, m, weight, n, bits)
+        if banded:
+            # Past the band's ends the path is infinite (an earlier, wider band may have
+            # left values there).
+            cur[0] = np.float32(np.inf)
+            cur[n + 1] = np.float32(np.inf)
+        return base, n, new_min
+
+    return walk_step
+
+
+_walk_step_banded = _walk_steps(True)
+_walk_step_whole = _walk_steps(False)
+
+
 @njit(inline="always")
-def _walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, write, y, x,
-               ey, ex, state, prev, cur, cur_bits, tmp, bits):
-    """One pixel (y, x) of a path; the edge crossed from the previous pixel is stored at
-    (ey, ex). ``state``: [previous band's lo, its count, the path's minimum as int32 bits;
-    count -1 before the path starts]. A pixel without a band restarts the path."""
-    width = lo.shape[1]
-    base = np.int64(lo[y, x])
-    n = np.int64(count[y, x])
-    if n <= 0:
-        state[1] = -1
-        return
-    src = cost[y, x]
-    dst = out[y, x]
-    if state[1] < 0:  # the path starts: its cost is the matching cost
-        if write:
-            new_min = _first_step_write(src, dst, cur, weight, n)
-        else:
-            new_min = _first_step(src, dst, cur, weight, n)
-    else:
-        if base != state[0] or n != state[1]:
-            _rebase(prev, tmp, base - state[0], state[1], n)
-        bits[0] = state[2]
-        m = bits.view(np.float32)[0]
-        cl = change_l[ey, ex]
-        change_r = change_r_rev[ey, width - 1 - ex + base:]
-        p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
-        if write:
-            new_min = _next_step_write(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
-                                       p2b, m, weight, n, bits)
-        else:
-            new_min = _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b,
-                                 m, weight, n, bits)
-    # Past the band's ends the path is infinite (an earlier, wider band may have left
-    # values there).
-    cur[0] = np.float32(np.inf)
-    cur[n + 1] = np.float32(np.inf)
-    state[0] = base
-    state[1] = n
-    bits.view(np.float32)[0] = new_min
-    state[2] = bits[0]
+def _walk_step(banded, cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, write, y,
+               x, ey, ex, prev_lo, prev_n, m, prev, cur, cur_bits, tmp, bits):
+    """:func:`_walk_steps`' step for bands (``banded``) or for the whole range."""
+    if banded:
+        return _walk_step_banded(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                                 write, y, x, ey, ex, prev_lo, prev_n, m, prev, cur, cur_bits,
+                                 tmp, bits)
+    return _walk_step_whole(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                            write, y, x, ey, ex, prev_lo, prev_n, m, prev, cur, cur_bits, tmp,
+                            bits)
 
 
 @njit(**KERNEL_OPTIONS)
-def scanline_rows(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, fresh, out):
+def scanline_rows(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight, fresh,
+                  out):
     """Add ``weight`` x the path costs of both directions along every row.
 
     C_r(p, d) = C(p, d) + min(C_r(p-r, d), C_r(p-r, d+-1) + P1,
@@ -155,23 +246,25 @@ def scanline_rows(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, fre
         path_bits = paths.view(np.int32)
         tmp = np.empty(depth + 2, dtype=np.float32)
         bits = np.empty(1, dtype=np.int32)
-        state = np.empty(3, dtype=np.int64)
+        prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
         for direction in (1, -1):
             write = fresh and direction == 1
             start = 0 if direction == 1 else width - 1
-            state[1] = -1
+            prev_n = np.int64(-1)
             for step in range(width):
                 x = start + direction * step
                 now = step % 2
                 # The edge crossed from the previous pixel: stored at the later of the two.
                 ex = x if direction == 1 else x + 1
-                _walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                           write, y, x, y, ex, state, paths[1 - now], paths[now],
-                           path_bits[now], tmp, bits)
+                prev_lo, prev_n, m = _walk_step(
+                    banded, cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, write,
+                    y, x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], path_bits[now],
+                    tmp, bits)
 
 
 @njit(**KERNEL_OPTIONS)
-def scanline_columns(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, chunk, out):
+def scanline_columns(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight, chunk,
+                     out):
     """:func:`scanline_rows` down and up every column, adding to ``out``.
 
     The columns go in chunks of ``chunk``, walked side by side a row at a time: each step
@@ -188,24 +281,27 @@ def scanline_columns(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, 
         cur = np.full((n, depth + 2), np.inf, dtype=np.float32)
         tmp = np.empty(depth + 2, dtype=np.float32)
         bits = np.empty(1, dtype=np.int32)
-        states = np.empty((n, 3), dtype=np.int64)
+        prev_lo = np.zeros(n, dtype=np.int64)
+        prev_n = np.empty(n, dtype=np.int64)
+        mins = np.zeros(n, dtype=np.float32)
         for direction in (1, -1):
-            states[:, 1] = -1
+            prev_n[:] = -1
             for step in range(height):
                 y = step if direction == 1 else height - 1 - step
                 ey = y if direction == 1 else y + 1  # the edge crossed, at the later row
                 cur_bits = cur.view(np.int32)
                 for k in range(n):
                     x = x0 + k
-                    _walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                               False, y, x, ey, x, states[k], prev[k], cur[k], cur_bits[k],
-                               tmp, bits)
+                    prev_lo[k], prev_n[k], mins[k] = _walk_step(
+                        banded, cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                        False, y, x, ey, x, prev_lo[k], prev_n[k], mins[k], prev[k], cur[k],
+                        cur_bits[k], tmp, bits)
                 prev, cur = cur, prev
 
 
 @njit(**KERNEL_OPTIONS)
-def scanline_diagonal_pass(cost, lo, count, change_l, change_r_rev, p1s, p2s, step_x, weight,
-                           out):
+def scanline_diagonal_pass(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, step_x,
+                           weight, out):
     """:func:`scanline_rows` along the diagonals that step (1, ``step_x``), both ways, adding.
 
     ``change_l[y, x]``: 1 where the colour changes by ``tau`` or more between (y, x) and
@@ -227,10 +323,10 @@ def scanline_diagonal_pass(cost, lo, count, change_l, change_r_rev, p1s, p2s, st
         path_bits = paths.view(np.int32)
         tmp = np.empty(depth + 2, dtype=np.float32)
         bits = np.empty(1, dtype=np.int32)
-        state = np.empty(3, dtype=np.int64)
+        prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
         for direction in (1, -1):
             start = 0 if direction == 1 else length - 1
-            state[1] = -1
+            prev_n = np.int64(-1)
             for step in range(length):
                 i = start + direction * step
                 y = y0 + i
@@ -239,6 +335,7 @@ def scanline_diagonal_pass(cost, lo, count, change_l, change_r_rev, p1s, p2s, st
                 # The edge crossed is stored at the later pixel of the two, top to bottom.
                 ey = y if direction == 1 else y + 1
                 ex = x if direction == 1 else x + step_x
-                _walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                           False, y, x, ey, ex, state, paths[1 - now], paths[now],
-                           path_bits[now], tmp, bits)
+                prev_lo, prev_n, m = _walk_step(
+                    banded, cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, False,
+                    y, x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], path_bits[now],
+                    tmp, bits)
