@@ -22,6 +22,7 @@ import cv2
 import numpy as np
 import yaml
 
+import vsmatch
 from vsmatch import datasets, evaluation, geometry, pipeline, rig
 from vsmatch.confidence import DEFAULT_MIN_CONFIDENCE, keep_confident
 from vsmatch.config import config_from_dict, load_config
@@ -91,7 +92,7 @@ def desk_near_top(root, cfg) -> float:
     px) with the range found from the pair, as `vsmatch run` without --calib searches."""
     desk = root / "real-cameras" / "desk"
     left, right = (cv2.imread(str(desk / f"{s}.png")) for s in ("left", "right"))
-    disp = pipeline.match(left, right, config=cfg)[-60:]
+    disp = vsmatch.match(left, right, config=cfg)[-60:]
     return float(np.median(disp[np.isfinite(disp)]))
 
 

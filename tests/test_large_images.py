@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from vsmatch import (aggregation, datasets, disparity, images, metrics, optimization, pipeline,
-                     pyramid, tiles)
+from vsmatch import (aggregation, datasets, disparity, images, level, metrics, optimization,
+                     pipeline, pyramid, scale, tiles)
 from vsmatch.bands import Bands
 from vsmatch.bench import upscaled_scene
 from vsmatch.cli import main
@@ -244,9 +244,9 @@ def test_band_levels_in_stripes_stay_near_one_piece(teddy):
     bands = pyramid.bands_from_coarse(coarse.disparity, coarse.labels, s.left.shape[:2],
                                       s.max_disp, cfg.pyramid)
     assert 0 < bands.count.mean() < 8 and bands.width <= cfg.pyramid.max_band
-    whole = pipeline._full_search_in_stripes(s.left, s.right, s.max_disp, cfg, bands)
+    whole = scale.in_stripes(level.solve, s.left, s.right, s.max_disp, cfg, bands)
     small = config_from_dict({"memory": {"max_mb": 16, "overlap": 24}}, base=cfg)
-    cut = pipeline._full_search_in_stripes(s.left, s.right, s.max_disp, small, bands)
+    cut = scale.in_stripes(level.solve, s.left, s.right, s.max_disp, small, bands)
     assert whole.stripes == 1 and cut.stripes > 1
     with np.errstate(invalid="ignore"):
         differ = ~((cut.disparity == whole.disparity)

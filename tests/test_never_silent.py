@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from vsmatch import batch, config, geometry, io, pipeline
+import vsmatch
+from vsmatch import batch, config, exposure, geometry, io, pipeline
 from vsmatch.cli import main
 
 from conftest import random_pair
@@ -134,7 +135,7 @@ def test_first_match_over_more_than_256_disparities(rng):
     """OpenCV 5's blur takes at most 128 channels; 4.x took 512."""
     left, right = random_pair(rng, height=40, width=420, shift=30)
     cfg = config.load_config("default")
-    disp, matched = pipeline._first_match(left, right, 300, cfg)
+    disp, matched = exposure.first_match(left, right, 300, cfg)
     assert disp.shape == (40, 420)
     assert np.mean(disp[matched] == 30) > 0.9 and matched[:, 340:].mean() > 0.5
 
@@ -457,16 +458,16 @@ def test_sigterm_ends_a_parallel_batch_and_its_workers(tmp_path, rng):
 
 def test_match_finds_the_range_when_max_disp_is_none(rng):
     left, right = verged_pair(rng)
-    result = pipeline.run(left, right, max_disp=None, config="paper")
+    result = vsmatch.run(left, right, max_disp=None, config="paper")
     low, high = result.search_range
     assert low <= -12 and high >= 10
-    disp = pipeline.match(left, right, max_disp=None, config="paper")
+    disp = vsmatch.match(left, right, max_disp=None, config="paper")
     np.testing.assert_array_equal(disp, result.disparity)
     np.testing.assert_array_equal(
-        disp, pipeline.match(left, right, min_disp=low, max_disp=high, config="paper"))
+        disp, vsmatch.match(left, right, min_disp=low, max_disp=high, config="paper"))
     left, right = shifted_pair(rng, 12)
     with pytest.raises(ValueError, match="swapped"):
-        pipeline.match(right, left, max_disp=None)
+        vsmatch.match(right, left, max_disp=None)
 
 
 # --- 18. the first run's compilation -----------------------------------------------------

@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
+import vsmatch
 from vsmatch import confidence, datasets, evaluation, metrics, photometric, pipeline, planes
 from vsmatch._kernels.planes import N_MOMENTS, cut_arms_at_jumps, plane_moments, plane_values
 from vsmatch.config import load_config, config_from_dict
@@ -235,7 +236,7 @@ def test_a_white_wall_stays_in_the_room(data_dir):
     from vsmatch import geometry
 
     left, right, camera = real_pair(data_dir, "ukulele-raw")
-    result = pipeline.run(left, right, config="default")
+    result = vsmatch.run(left, right, config="default")
     depth = geometry.depth_from_disparity(
         confidence.keep_confident(result.disparity, result.confidence,
                                   confidence.DEFAULT_MIN_CONFIDENCE), camera)
@@ -247,7 +248,7 @@ def test_a_white_wall_stays_in_the_room(data_dir):
 def test_the_near_desk_top_is_found(data_dir):
     """The desk's bottom rows are about 125 px away; default found 58 there before."""
     left, right, _ = real_pair(data_dir, "desk")
-    disp = pipeline.match(left, right, config="default")[-60:]
+    disp = vsmatch.match(left, right, config="default")[-60:]
     assert abs(np.median(disp[np.isfinite(disp)]) - 125) < 8  # measured 121.7
 
 

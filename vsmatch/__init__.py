@@ -16,10 +16,10 @@ __version__ = "0.5.0"
 #: Each public name and the module that defines it.
 _EXPORTS = {
     "Calibration": "geometry", "Config": "config", "ConfigError": "config",
-    "INVALID_DISPARITY": "disparity", "MatchResult": "pipeline", "StereoMatcher": "matcher",
+    "INVALID_DISPARITY": "disparity", "MatchResult": "result", "StereoMatcher": "matcher",
     "depth_from_disparity": "geometry", "estimate_disparity_range": "search_range",
-    "load_config": "config", "match": "pipeline", "point_cloud": "geometry",
-    "read_calibration": "geometry", "run": "pipeline",
+    "load_config": "config", "match": "api", "point_cloud": "geometry",
+    "read_calibration": "geometry", "run": "api",
 }
 
 __all__ = sorted([*_EXPORTS, "__version__"])

@@ -283,6 +283,7 @@ def dense_estimate(left: np.ndarray, right: np.ndarray, low: float = 0.0
     """The high and low percentiles of a wide, coarse vsmatch run's checked disparities
     (None when the run is not usable). It searches ``0 .. half the width``, from twice
     ``low`` when the sparse matches reach below 0."""
+    # Imported here: the range's checks load without the method's kernels.
     from .disparity import VALID
     from .pipeline import run
 

@@ -1,0 +1,133 @@
+"""One pyramid level's solver: the method's stages in order over each pixel's band.
+
+The full search is the band ``0 .. max_disp`` at every pixel; coarse-to-fine and video
+give narrower bands (``vsmatch.bands``). Everything around a level (offsets, levels,
+stripes) is ``vsmatch.scale``'s.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import numpy as np
+
+from . import (aggregation, confidence, cost, disparity, noise, optimization, refinement,
+               sensitivity, volumes)
+from .bands import Bands
+from .config import Config, CostConfig
+from .disparity import INVALID_DISPARITY
+from .images import to_grey
+from .result import MatchResult, timed
+
+
+def matching_costs(left: np.ndarray, right: np.ndarray, n_disp: int, cost_cfg: CostConfig,
+                    direction: bool = True, bands: Bands | None = None
+                    ) -> tuple[np.ndarray, tuple, tuple]:
+    """The cost volume (ALGORITHM.md §1-2) and each view's gradient magnitude and
+    direction (None unless ``direction``), which the arms need too."""
+    grey_l, grey_r = to_grey(left), to_grey(right)
+    sens_l = sensitivity.visual_sensitivity(grey_l, direction)
+    sens_r = sensitivity.visual_sensitivity(grey_r, direction)
+    volume = cost.cost_volume(left, right, cost.census_for(grey_l, cost_cfg),
+                              cost.census_for(grey_r, cost_cfg), sens_l[0], sens_r[0],
+                              n_disp=n_disp, cfg=cost_cfg, bands=bands)
+    return volume, sens_l, sens_r
+
+
+def solve(left: np.ndarray, right: np.ndarray, max_disp: int,
+                 cfg: Config, bands: Bands | None = None) -> MatchResult:
+    """One level's solver: the stages in order (ALGORITHM.md §1-5), every pixel searching
+    its band of ``0 .. max_disp`` (default: the whole range, the full search)."""
+    n_disp = int(max_disp) + 1
+    seconds: dict[str, float] = {}
+    stage = functools.partial(timed, seconds)
+
+    noise_sigma = None
+    if cfg.noise.adapt:
+        with stage("noise"):
+            cfg, noise_sigma = noise.adapt_to_pair(cfg, left, right)
+    if cfg.cost.presmooth_sigma > 0:
+        with stage("presmooth"):
+            left = sensitivity.presmooth(left, cfg.cost.presmooth_sigma)
+            right = sensitivity.presmooth(right, cfg.cost.presmooth_sigma)
+
+    with stage("cost"):
+        volume, (grad_l, theta_l), (grad_r, theta_r) = matching_costs(
+            left, right, n_disp, cfg.cost, direction=cfg.arms.kappa != 0, bands=bands)
+
+    arms_cfg = cfg.arms
+    scanline = cfg.scanline.enabled
+    if bands is not None and not bands.is_full:  # the finer levels' options
+        scanline = scanline and cfg.pyramid.scanline
+        support = cfg.pyramid.support
+        arms_cfg = dataclasses.replace(arms_cfg, l1=min(arms_cfg.l1, support),
+                                       l2=min(arms_cfg.l2, support))
+    arms_l = arms_r = None
+    if cfg.aggregation.iterations > 0 or cfg.voting.enabled:
+        with stage("arms"):
+            arms_l = aggregation.cross_arms(left, theta_l, grad_l, arms_cfg)
+            if cfg.aggregation.iterations > 0:
+                arms_r = aggregation.cross_arms(right, theta_r, grad_r, arms_cfg)
+    # One work volume serves aggregation, then holds the scanline costs: the cost volume
+    # is allocated twice, not three times (allocation is a measurable share of the time).
+    work = volumes.volume("work", volume.shape)
+    if cfg.aggregation.iterations > 0:
+        with stage("aggregation"):
+            volume = aggregation.aggregate_cross(volume, arms_l, arms_r, scratch=work,
+                                                 iterations=cfg.aggregation.iterations,
+                                                 bands=bands)
+
+    aggregated = volume
+    if scanline:
+        with stage("scanline"):
+            volume = optimization.scanline_optimise(volume, left, right, cfg.scanline,
+                                                    out=work, bands=bands)
+
+    with stage("wta"):  # with the winners' cost curves, for the confidence
+        if cfg.consistency.enabled:
+            disp_l, disp_r, curves = disparity.winner_takes_all_with_curve(volume,
+                                                                           bands=bands)
+        else:
+            disp_l = disparity.winner_takes_all(volume, bands)
+            curves = confidence.cost_curves(volume, disp_l, bands)
+    with stage("confidence"):
+        curve = confidence.curve_features(curves, arms_l)
+        if aggregated is not volume:  # the same margin before the scanline optimisation
+            raw = confidence.cost_curves(aggregated, disp_l, bands)
+            curve["raw_margin"] = confidence.curve_features(raw, None)["margin"]
+        else:
+            curve["raw_margin"] = curve["margin"]
+
+    labels = None
+    if cfg.consistency.enabled:
+        with stage("consistency"):
+            labels = disparity.left_right_check(disp_l, disp_r, n_disp=n_disp,
+                                                tolerance=cfg.consistency.tolerance)
+        if cfg.voting.enabled:
+            with stage("voting"):
+                disp_l, labels = refinement.region_vote(disp_l, labels, arms_l,
+                                                        n_disp=n_disp, cfg=cfg.voting)
+        with stage("fill"):
+            if cfg.fill.enabled:
+                result = disparity.fill_rejected(disp_l, labels, left, cfg.fill)
+            else:
+                result = disparity.mark_rejected(disp_l, labels)
+    else:
+        result = disp_l.astype(np.float32)
+        result[disp_l < 0] = INVALID_DISPARITY  # no candidate in the pixel's band
+
+    if cfg.discontinuity.enabled:
+        with stage("discontinuity"):
+            result = refinement.discontinuity_adjust(result, volume, cfg.discontinuity, bands)
+    if cfg.subpixel.enabled:
+        with stage("subpixel"):
+            # The aggregated costs, not the scanline ones: the penalties flatten the cost
+            # curve around the minimum (measured: fewer bad pixels at 0.5 and 1.0).
+            result = refinement.subpixel(result, aggregated, cfg.subpixel.fit, bands)
+    if cfg.subpixel.median:
+        with stage("median"):
+            result = refinement.median3(result)
+
+    return MatchResult(disparity=result, labels=labels, seconds=seconds, config=cfg,
+                       noise_sigma=noise_sigma, curve=curve)
