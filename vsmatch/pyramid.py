@@ -35,9 +35,8 @@ def coarse_levels(width: int, n_disp: int, max_row_cells: int, min_levels: int =
     than ``max_cells`` (> 0) cells (a camera-size pair: the bands above a halved full search
     keep its accuracy, where a second level down loses it); never below 64 columns or 16
     disparities; and at least ``min_levels`` times (the ``fast`` config's coarse-to-fine at
-    every size) while the level below keeps :data:`MIN_FORCED_DISPARITIES` (a small range
-    halved leaves too little to choose from: tsukuba's 16 went to 8, bad 1.0 3.2 -> 7.4;
-    venus's 20 to 10 did not hurt)."""
+    every size) while the level below keeps :data:`MIN_FORCED_DISPARITIES` (a range
+    halved below that leaves too few disparities to tell surfaces apart)."""
     levels = 0
     while ((width * n_disp > max_row_cells
             or (levels == 0 and 0 < max_cells < width * height * n_disp)

@@ -259,11 +259,6 @@ def feature_matches(left: np.ndarray, right: np.ndarray, max_width: int = FEATUR
     return FeatureMatches(*points.T, height=left.shape[0], factor=factor)
 
 
-def sparse_disparities(left: np.ndarray, right: np.ndarray) -> np.ndarray:
-    """Disparities ``x_left - x_right`` of the consistent feature matches (float64)."""
-    return feature_matches(left, right).consistent_disparities()
-
-
 def _agreeing(x: np.ndarray, y: np.ndarray, disp: np.ndarray, factor: int) -> np.ndarray:
     """The disparities that agree with the median of their nearest matches' (a wrong
     match rarely has neighbours that agree with it)."""
