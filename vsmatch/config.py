@@ -290,6 +290,36 @@ class MemoryConfig:
 
 
 @dataclass(frozen=True)
+class TemporalConfig:
+    """Video (``vsmatch.temporal``): after a frame searched over the whole range, each
+    frame searches bands around the last one's disparities; a full search again every
+    ``refresh`` frames, on a cut and after a jump in exposure. Where the image holds still,
+    the last disparity is held (an average weighted by ``hold``)."""
+
+    refresh: int = _param(30, 1, 100000, doc="Search the whole range again every this many frames.")
+    change: float = _param(4.0, 0.0, 255.0, doc=(
+        "A pixel has changed when its 5 × 5 mean absolute difference from the last frame "
+        "exceeds this (grey levels)."))
+    motion: int = _param(4, 0, 64, doc=(
+        "Pixels a changed region may have moved: its band holds the last disparities this "
+        "far around."))
+    band: int = _param(1, 0, 64, doc="Disparities added on each side of a band.")
+    unsure: float = _param(0.5, 0.0, 1.0, doc=(
+        "Below this confidence the last estimate counts as unsure (its band as a changed "
+        "pixel's)."))
+    max_band: int = _param(24, 3, 4096, doc="Most candidates a pixel keeps.")
+    hold: float = _param(0.6, 0.0, 1.0, doc=(
+        "Where the image holds still, the share of the last disparity kept (0: none)."))
+    exposure_jump: float = _param(10.0, 0.0, 255.0, doc=(
+        "A change of the mean grey level (grey levels) that starts a full search."))
+    cut_share: float = _param(0.5, 0.0, 1.0, doc=(
+        "A share of changed pixels that counts as a cut (a full search)."))
+    collapse: float = _param(0.7, 0.0, 1.0, doc=(
+        "A full search again when a frame's mean confidence falls below this share of the "
+        "last full search's."))
+
+
+@dataclass(frozen=True)
 class Config:
     """All parameters of the method, one section per pipeline stage."""
 
@@ -307,6 +337,7 @@ class Config:
     photometric: PhotometricConfig = field(default_factory=PhotometricConfig)
     pyramid: PyramidConfig = field(default_factory=PyramidConfig)
     memory: MemoryConfig = field(default_factory=MemoryConfig)
+    temporal: TemporalConfig = field(default_factory=TemporalConfig)
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
         return dataclasses.asdict(self)

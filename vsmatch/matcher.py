@@ -17,6 +17,7 @@ from . import pipeline, rig, volumes
 from .config import Config, load_config
 from .geometry import Calibration, CalibrationError, read_calibration
 from .search_range import resolve_range
+from .temporal import Temporal
 
 #: The range is found again when more than this share of a frame's confident pixels
 #: lies within TOP_MARGIN of its top: something came closer than the range allows.
@@ -27,17 +28,24 @@ CONFIDENT = 0.5
 
 
 class StereoMatcher:
-    """``StereoMatcher(max_disp=None, min_disp=0, config=None, calib=None)``.
+    """``StereoMatcher(max_disp=None, min_disp=0, config=None, calib=None, temporal=False)``.
 
     ``max_disp`` None finds the range from the first frame (and again when needed);
     ``calib`` is a rectified pair's calibration (a path or a :class:`Calibration`), or a
     raw rig's file(s), whose rectification is then applied to every frame. ``compute``
     gives the disparity, :meth:`result` everything (confidence, timings, range).
+    ``temporal``: the frames are a stream; after the first (which is matched as alone),
+    each searches near the last one's disparities and holds them where the image holds
+    still (``vsmatch.temporal``). Off, every frame is matched alone.
     """
 
     def __init__(self, max_disp: int | None = None, min_disp: int | None = None,
-                 config: Config | str | None = None, calib=None, alpha: float = 0.0):
+                 config: Config | str | None = None, calib=None, alpha: float = 0.0,
+                 temporal: bool = False):
         self.config = load_config(config)
+        if not isinstance(temporal, bool):
+            raise ValueError(f"temporal must be True or False, got {temporal!r}")
+        self.temporal = Temporal() if temporal else None
         for name, value in (("max_disp", max_disp), ("min_disp", min_disp)):
             if value is not None and (isinstance(value, bool)
                                       or not isinstance(value, (int, np.integer))):
@@ -87,7 +95,8 @@ class StereoMatcher:
             self.range = self._find_range(left, right)
         low, high = self.range
         with volumes.reused(self._volumes):
-            result = pipeline.run(left, right, max_disp=high, min_disp=low, config=self.config)
+            result = pipeline.run(left, right, max_disp=high, min_disp=low, config=self.config,
+                                  temporal=self.temporal)
         self.frames += 1
         if not self.fixed_range and self._top_is_crowded(result, high):
             self.range = None  # the next frame looks for it again

@@ -9,11 +9,13 @@ import functools
 
 import numpy as np
 
-from . import confidence, exposure, planes, pyramid, scale
+from . import confidence, exposure, photometric, planes, pyramid, scale
+from . import temporal as video
 from .checks import check_pair, check_views  # noqa: F401  (the inputs' checks, re-exported)
 from .config import Config, load_config
 from .level import solve
 from .result import MatchResult, timed
+from .temporal import Memory, Temporal
 
 
 def match(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0,
@@ -23,18 +25,42 @@ def match(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int =
 
 
 def run(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0,
-        config: Config | str | None = None) -> MatchResult:
+        config: Config | str | None = None, temporal: Temporal | None = None) -> MatchResult:
     """The method over ``min_disp .. max_disp``, with per-stage timings, the left-right
-    labels, the confidence and the range used (:func:`vsmatch.run` for the parameters)."""
+    labels, the confidence and the range used (:func:`vsmatch.run` for the parameters).
+    ``temporal``: the memory of a stream's earlier frames (``vsmatch.temporal``), used and
+    updated; this frame then searches near the last one's disparities."""
     cfg = load_config(config)
     check_pair(left, right, max_disp, cfg, min_disp)
-    return scale.with_offset(functools.partial(_run_from_zero, cfg=cfg), left, right,
-                             min_disp, max_disp)
+    return scale.with_offset(functools.partial(_run_from_zero, cfg=cfg, temporal=temporal),
+                             left, right, min_disp, max_disp)
 
 
-def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
-                   cfg: Config) -> MatchResult:
-    """Disparities ``0 .. max_disp``."""
+def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
+                   temporal: Temporal | None = None) -> MatchResult:
+    """Disparities ``0 .. max_disp``: near the last frame's when a stream's memory allows."""
+    if temporal is None:
+        return _search_whole_range(left, right, max_disp, cfg)
+    grey = video.grey_of(left)
+    memory = temporal.memory
+    moved = None
+    if memory is not None and memory.shape == grey.shape:
+        moved = video.changed(memory.grey, grey, cfg.temporal)
+    temporal.reason = video.full_search_reason(memory, grey, max_disp, moved, cfg.temporal)
+    if temporal.reason is None:
+        result = _search_near_last(left, right, max_disp, memory, moved)
+        if result.confidence.mean() >= cfg.temporal.collapse * memory.full_confidence:
+            temporal.memory = video.remember(result, grey, max_disp, memory)
+            return result
+        temporal.reason = "confidence collapsed"
+    result = _search_whole_range(left, right, max_disp, cfg)
+    temporal.memory = video.remember(result, grey, max_disp)
+    return result
+
+
+def _search_whole_range(left: np.ndarray, right: np.ndarray, max_disp: int,
+                        cfg: Config) -> MatchResult:
+    """Disparities ``0 .. max_disp``, every one a candidate at every pixel."""
     seconds: dict[str, float] = {}
     correction = None
     # 1. The right view's colours mapped onto the left's; how far the colour term holds.
@@ -47,17 +73,48 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int,
                                    cfg.pyramid.min_levels, left.shape[0], cfg.pyramid.max_cells)
     result = scale.coarse_to_fine(solve, left, right, max_disp, cfg, levels)
     result.seconds = {**seconds, **result.seconds}
+    result.photometric = correction
+    result.exposed = cfg
+    return _finish(result, left, max_disp)
+
+
+def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int, memory: Memory,
+                      moved: np.ndarray) -> MatchResult:
+    """Disparities near the last frame's (``vsmatch.temporal``), held where the image
+    held still; the exposure correction and colour weight the last full search learnt."""
+    cfg = memory.config
+    seconds: dict[str, float] = {}
+    if memory.correction is not None:
+        with timed(seconds, "photometric"):
+            right = photometric.apply(right, memory.correction)
+    with timed(seconds, "bands"):
+        bands = video.bands_from_previous(memory, moved, cfg.temporal)
+    result = scale.in_stripes(solve, left, right, max_disp, cfg, bands)
+    result.seconds = {**seconds, **result.seconds}
+    result.photometric, result.exposed = memory.correction, cfg
+    # A band's cost curve is short: the last full search's stand where nothing moved.
+    result.curve = {name: np.where(moved, values, memory.curve[name])
+                    for name, values in result.curve.items()}
+    result = _finish(result, left, max_disp, before_confidence=functools.partial(
+        video.hold, memory.disparity, moved=moved, cfg=cfg.temporal))
+    return result
+
+
+def _finish(result: MatchResult, left: np.ndarray, max_disp: int,
+            before_confidence=None) -> MatchResult:
+    """Planes, the range's limits and the confidence."""
     # 3. Slanted planes over depth-aware regions.
     adapted = result.config  # with the noise adaptation's changes
     if adapted.planes.enabled and result.labels is not None:
         with timed(result.seconds, "planes"):
             result.disparity = planes.fit_planes(result.disparity, result.labels, left,
                                                  adapted.arms, adapted.planes)
-    result.photometric = correction
     # A disparity outside the searched range is no estimate: a sub-pixel fit at the
     # range's end or a plane's fill stops at the end (the confidence marks such pixels).
     finite = np.isfinite(result.disparity)
     result.disparity[finite] = np.clip(result.disparity[finite], 0, max_disp)
+    if before_confidence is not None:
+        result.disparity = before_confidence(result.disparity)
     # 4. How likely each disparity is right.
     with timed(result.seconds, "confidence"):
         result.confidence = confidence.confidence_map(result.disparity, result.labels, left,

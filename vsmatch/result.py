@@ -29,6 +29,7 @@ class MatchResult:
     confidence: np.ndarray | None = None
     # The cost-curve features the confidence is made from (vsmatch.confidence).
     curve: dict[str, np.ndarray] | None = None
+    exposed: Config | None = None  # the config after the exposure correction
 
 
 @contextmanager

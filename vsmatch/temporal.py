@@ -1,0 +1,141 @@
+"""Video: each frame searches near what the last one found.
+
+After a frame searched over the whole range, a frame's candidates are bands around the
+last frame's disparities (``vsmatch.bands``): the 3 x 3 range of the last disparities,
+widened to ``temporal.motion`` pixels around where the image changed or the last estimate
+was unsure. The whole range is searched again every ``temporal.refresh`` frames, on a cut
+(most pixels changed), after a jump in exposure and when a frame's confidence collapses.
+Where the image holds still, the last disparity is held: the new one moves only part of
+the way (``temporal.hold``), and a pixel that loses its estimate keeps the last one; where
+it changed, the new estimate counts alone, so that a moving object leaves no trail.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from . import bands as band_tools
+from .config import Config, TemporalConfig
+from .images import to_grey
+
+#: The window over which a pixel's change between frames is averaged (noise cancels).
+CHANGE_WINDOW = 5
+
+
+@dataclass
+class Memory:
+    """What a frame leaves the next one, in the views' coordinates as matched from 0."""
+
+    shape: tuple[int, int]
+    max_disp: int
+    disparity: np.ndarray  # float32, inf where there is no estimate
+    confidence: np.ndarray
+    grey: np.ndarray  # the left view, float32
+    curve: dict[str, np.ndarray]  # the cost-curve features, from the last full search on
+    config: Config  # the config as used after the exposure correction
+    correction: object  # photometric.Correction or None
+    full_confidence: float  # the mean confidence of the last full search
+    since_full: int = 0
+
+
+class Temporal:
+    """The memory a stream of frames carries from one to the next (``StereoMatcher`` and
+    ``vsmatch video`` hold one); ``reason`` says why the last frame searched the whole
+    range (``None``: it searched bands)."""
+
+    def __init__(self):
+        self.memory: Memory | None = None
+        self.reason: str | None = None
+
+
+def grey_of(view: np.ndarray) -> np.ndarray:
+    return to_grey(view).astype(np.float32)
+
+
+def changed(previous: np.ndarray, grey: np.ndarray, cfg: TemporalConfig) -> np.ndarray:
+    """Where the image changed since the last frame: the mean absolute difference over
+    :data:`CHANGE_WINDOW` square windows above ``change``, grown by ``motion`` pixels (what
+    moved in, and what it uncovered)."""
+    difference = cv2.blur(np.abs(grey - previous), (CHANGE_WINDOW, CHANGE_WINDOW))
+    moved = (difference > cfg.change).astype(np.uint8)
+    if cfg.motion > 0:
+        size = 2 * cfg.motion + 1
+        moved = cv2.dilate(moved, np.ones((size, size), np.uint8))
+    return moved.astype(bool)
+
+
+def full_search_reason(memory: Memory | None, grey: np.ndarray, max_disp: int,
+                       moved: np.ndarray | None, cfg: TemporalConfig) -> str | None:
+    """Why this frame searches the whole range, or None (it searches bands)."""
+    if memory is None:
+        return "first frame"
+    if memory.shape != grey.shape or memory.max_disp != max_disp:
+        return "new size or range"
+    if memory.since_full + 1 >= cfg.refresh:
+        return "refresh"
+    if abs(float(grey.mean()) - float(memory.grey.mean())) > cfg.exposure_jump:
+        return "exposure"
+    if moved is not None and moved.mean() > cfg.cut_share:
+        return "cut"
+    return None
+
+
+def _extremes(disparity: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest and largest finite disparity over each pixel's ``size`` x ``size``
+    neighbourhood (inf and -inf where there is none)."""
+    finite = np.isfinite(disparity)
+    kernel = np.ones((size, size), np.uint8)
+    low = cv2.erode(np.where(finite, disparity, np.inf).astype(np.float32), kernel,
+                    borderType=cv2.BORDER_REPLICATE)
+    high = cv2.dilate(np.where(finite, disparity, -np.inf).astype(np.float32), kernel,
+                      borderType=cv2.BORDER_REPLICATE)
+    return low, high
+
+
+def bands_from_previous(memory: Memory, moved: np.ndarray, cfg: TemporalConfig
+                        ) -> band_tools.Bands:
+    """Each pixel's candidates: the last frame's 3 x 3 range widened by ``band``, and
+    where the image moved or the last estimate was unsure, its range over ``motion``
+    pixels around."""
+    previous = memory.disparity
+    low, high = _extremes(previous, 3)
+    wide = moved | (memory.confidence < cfg.unsure)
+    if cfg.motion > 0:
+        low_far, high_far = _extremes(previous, 2 * cfg.motion + 1)
+        low = np.where(wide, low_far, low)
+        high = np.where(wide, high_far, high)
+    centre = np.where(np.isfinite(previous), previous, (low + high) / 2)
+    with np.errstate(invalid="ignore"):
+        return band_tools.around(low - cfg.band, high + cfg.band, centre, memory.max_disp + 1,
+                                 cfg.max_band)
+
+
+def hold(previous: np.ndarray, new: np.ndarray, moved: np.ndarray,
+         cfg: TemporalConfig) -> np.ndarray:
+    """The disparity shown: where the image held still, the last one moved part of the way
+    to the new one (and kept where the new frame has none); elsewhere the new one."""
+    out = new.copy()
+    still = ~moved & np.isfinite(previous)
+    both = still & np.isfinite(new)
+    keep = np.float32(cfg.hold)
+    out[both] = previous[both] + (1 - keep) * (new[both] - previous[both])
+    lost = still & ~np.isfinite(new)
+    out[lost] = previous[lost]
+    return out
+
+
+def remember(result, grey: np.ndarray, max_disp: int, memory: Memory | None = None
+             ) -> Memory:
+    """The memory a frame's result (``MatchResult``, matched from 0) leaves the next frame:
+    a full search's anew (``memory`` None), a band search's added to the last."""
+    curve = {name: values.copy() for name, values in result.curve.items()}
+    if memory is None:
+        return Memory(grey.shape, int(max_disp), result.disparity.copy(),
+                      result.confidence.copy(), grey, curve, result.exposed,
+                      result.photometric, float(result.confidence.mean()))
+    return Memory(memory.shape, memory.max_disp, result.disparity.copy(),
+                  result.confidence.copy(), grey, curve, memory.config, memory.correction,
+                  memory.full_confidence, memory.since_full + 1)
