@@ -22,6 +22,9 @@ class Bands:
     count: np.ndarray
     width: int
     n_disp: int
+    # Pixels searched no more, their disparity known (float32, inf elsewhere): a pixel
+    # with no candidates and a held value keeps it (video's still pixels).
+    held: np.ndarray | None = None
 
     @classmethod
     def full(cls, shape: tuple[int, int], n_disp: int) -> "Bands":
@@ -35,11 +38,8 @@ class Bands:
     def rows(self, first: int, stop: int) -> "Bands":
         """The bands of rows ``first .. stop - 1``."""
         return Bands(np.ascontiguousarray(self.lo[first:stop]),
-                     np.ascontiguousarray(self.count[first:stop]), self.width, self.n_disp)
-
-    def columns(self, keep: slice) -> "Bands":
-        return Bands(np.ascontiguousarray(self.lo[:, keep]),
-                     np.ascontiguousarray(self.count[:, keep]), self.width, self.n_disp)
+                     np.ascontiguousarray(self.count[first:stop]), self.width, self.n_disp,
+                     None if self.held is None else self.held[first:stop])
 
 
 def of(volume: np.ndarray, bands: Bands | None) -> Bands:

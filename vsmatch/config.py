@@ -307,13 +307,14 @@ class TemporalConfig:
     unsure: float = _param(0.5, 0.0, 1.0, doc=(
         "Below this confidence the last estimate counts as unsure (its band as a changed "
         "pixel's)."))
-    max_band: int = _param(24, 3, 4096, doc="Most candidates a pixel keeps.")
-    hold: float = _param(0.6, 0.0, 1.0, doc=(
+    max_band: int = _param(12, 3, 4096, doc="Most candidates a pixel keeps.")
+    hold: float = _param(0.8, 0.0, 1.0, doc=(
         "Where the image holds still, the share of the last disparity kept (0: none)."))
     exposure_jump: float = _param(10.0, 0.0, 255.0, doc=(
         "A change of the mean grey level (grey levels) that starts a full search."))
-    cut_share: float = _param(0.5, 0.0, 1.0, doc=(
-        "A share of changed pixels that counts as a cut (a full search)."))
+    cut: float = _param(0.2, 0.0, 1.0, doc=(
+        "A cut (a full search): the grey-level histograms of two frames this far apart "
+        "(total variation, 0 to 1; a camera that moves keeps its histogram)."))
     collapse: float = _param(0.7, 0.0, 1.0, doc=(
         "A full search again when a frame's mean confidence falls below this share of the "
         "last full search's."))

@@ -104,6 +104,10 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int,
         with stage("consistency"):
             labels = disparity.left_right_check(disp_l, disp_r, n_disp=n_disp,
                                                 tolerance=cfg.consistency.tolerance)
+        if bands is not None and bands.held is not None:  # as found before: consistent
+            held = np.isfinite(bands.held)
+            disp_l[held] = np.rint(bands.held[held])
+            labels[held] = disparity.VALID
         if cfg.voting.enabled:
             with stage("voting"):
                 disp_l, labels = refinement.region_vote(disp_l, labels, arms_l,
@@ -114,6 +118,9 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int,
             else:
                 result = disparity.mark_rejected(disp_l, labels)
     else:
+        if bands is not None and bands.held is not None:
+            held = np.isfinite(bands.held)
+            disp_l[held] = np.rint(bands.held[held])
         result = disp_l.astype(np.float32)
         result[disp_l < 0] = INVALID_DISPARITY  # no candidate in the pixel's band
 

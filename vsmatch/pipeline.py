@@ -43,11 +43,10 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Conf
         return _search_whole_range(left, right, max_disp, cfg)
     grey = video.grey_of(left)
     memory = temporal.memory
-    moved = None
-    if memory is not None and memory.shape == grey.shape:
-        moved = video.changed(memory.grey, grey, cfg.temporal)
-    temporal.reason = video.full_search_reason(memory, grey, max_disp, moved, cfg.temporal)
+    temporal.reason = video.full_search_reason(memory, grey, max_disp, cfg.temporal)
     if temporal.reason is None:
+        memory = video.aligned(memory, grey)  # a moving camera's memory moves with it
+        moved = video.changed(memory.grey, grey, cfg.temporal)
         result = _search_near_last(left, right, max_disp, memory, moved)
         if result.confidence.mean() >= cfg.temporal.collapse * memory.full_confidence:
             temporal.memory = video.remember(result, grey, max_disp, memory)

@@ -4,7 +4,8 @@ After a frame searched over the whole range, a frame's candidates are bands arou
 last frame's disparities (``vsmatch.bands``): the 3 x 3 range of the last disparities,
 widened to ``temporal.motion`` pixels around where the image changed or the last estimate
 was unsure. The whole range is searched again every ``temporal.refresh`` frames, on a cut
-(most pixels changed), after a jump in exposure and when a frame's confidence collapses.
+(the grey-level histogram changed), after a jump in exposure and when a frame's confidence
+collapses.
 Where the image holds still, the last disparity is held: the new one moves only part of
 the way (``temporal.hold``), and a pixel that loses its estimate keeps the last one; where
 it changed, the new estimate counts alone, so that a moving object leaves no trail.
@@ -12,6 +13,7 @@ it changed, the new estimate counts alone, so that a moving object leaves no tra
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import cv2
@@ -55,6 +57,47 @@ def grey_of(view: np.ndarray) -> np.ndarray:
     return to_grey(view).astype(np.float32)
 
 
+#: Below this phase-correlation peak the views' shift is not trusted (taken as none).
+MIN_RESPONSE = 0.05
+
+
+def image_shift(previous: np.ndarray, grey: np.ndarray) -> tuple[int, int]:
+    """The whole image's shift (rows, columns) from the last frame to this one, by phase
+    correlation of the halved views: what a panning or travelling camera does to every
+    pixel at once (0, 0 where the correlation does not say)."""
+    a, b = (cv2.resize(v, None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA)
+            for v in (previous, grey))
+    window = cv2.createHanningWindow(a.shape[::-1], cv2.CV_32F)
+    (dx, dy), response = cv2.phaseCorrelate(a, b, window)
+    if not response >= MIN_RESPONSE:
+        return 0, 0
+    return int(round(2 * dy)), int(round(2 * dx))
+
+
+def _moved(image: np.ndarray, dy: int, dx: int, fill) -> np.ndarray:
+    """``image`` moved by (dy, dx) pixels; what comes into view holds ``fill``."""
+    out = np.full_like(image, fill)
+    height, width = image.shape[:2]
+    if abs(dy) >= height or abs(dx) >= width:
+        return out
+    out[max(dy, 0):height + min(dy, 0), max(dx, 0):width + min(dx, 0)] = \
+        image[max(-dy, 0):height + min(-dy, 0), max(-dx, 0):width + min(-dx, 0)]
+    return out
+
+
+def aligned(memory: Memory, grey: np.ndarray) -> Memory:
+    """The memory moved with the image (:func:`image_shift`), so that each pixel's memory
+    is of the same scene point; what came into view has none (and counts as changed)."""
+    dy, dx = image_shift(memory.grey, grey)
+    if dy == 0 and dx == 0:
+        return memory
+    return dataclasses.replace(
+        memory, disparity=_moved(memory.disparity, dy, dx, np.inf),
+        confidence=_moved(memory.confidence, dy, dx, 0.0),
+        grey=_moved(memory.grey, dy, dx, -1e6),
+        curve={name: _moved(values, dy, dx, 0.0) for name, values in memory.curve.items()})
+
+
 def changed(previous: np.ndarray, grey: np.ndarray, cfg: TemporalConfig) -> np.ndarray:
     """Where the image changed since the last frame: the mean absolute difference over
     :data:`CHANGE_WINDOW` square windows above ``change``, grown by ``motion`` pixels (what
@@ -68,7 +111,7 @@ def changed(previous: np.ndarray, grey: np.ndarray, cfg: TemporalConfig) -> np.n
 
 
 def full_search_reason(memory: Memory | None, grey: np.ndarray, max_disp: int,
-                       moved: np.ndarray | None, cfg: TemporalConfig) -> str | None:
+                       cfg: TemporalConfig) -> str | None:
     """Why this frame searches the whole range, or None (it searches bands)."""
     if memory is None:
         return "first frame"
@@ -78,9 +121,19 @@ def full_search_reason(memory: Memory | None, grey: np.ndarray, max_disp: int,
         return "refresh"
     if abs(float(grey.mean()) - float(memory.grey.mean())) > cfg.exposure_jump:
         return "exposure"
-    if moved is not None and moved.mean() > cfg.cut_share:
+    if histogram_distance(memory.grey, grey) > cfg.cut:
         return "cut"
     return None
+
+
+#: Bins of the grey-level histograms compared for a cut.
+HISTOGRAM_BINS = 32
+
+
+def histogram_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Total variation between two views' grey-level histograms (0: the same, 1: apart)."""
+    h = [np.histogram(v, bins=HISTOGRAM_BINS, range=(0, 256))[0] / v.size for v in (a, b)]
+    return 0.5 * float(np.abs(h[0] - h[1]).sum())
 
 
 def _extremes(disparity: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
@@ -107,10 +160,15 @@ def bands_from_previous(memory: Memory, moved: np.ndarray, cfg: TemporalConfig
         low_far, high_far = _extremes(previous, 2 * cfg.motion + 1)
         low = np.where(wide, low_far, low)
         high = np.where(wide, high_far, high)
-    centre = np.where(np.isfinite(previous), previous, (low + high) / 2)
     with np.errstate(invalid="ignore"):
-        return band_tools.around(low - cfg.band, high + cfg.band, centre, memory.max_disp + 1,
-                                 cfg.max_band)
+        centre = np.where(np.isfinite(previous), previous, (low + high) / 2)
+        bands = band_tools.around(low - cfg.band, high + cfg.band, centre,
+                                  memory.max_disp + 1, cfg.max_band)
+    # Still, sure pixels are not searched again: they keep the last disparity, and serve
+    # the searched ones as consistent neighbours.
+    held = ~wide & np.isfinite(previous)
+    bands.count[held] = 0
+    return dataclasses.replace(bands, held=np.where(held, previous, np.inf).astype(np.float32))
 
 
 def hold(previous: np.ndarray, new: np.ndarray, moved: np.ndarray,

@@ -63,6 +63,8 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
         for x in range(width):
             base = np.int64(lo[y, x])
             n = np.int64(count[y, x])
+            if n <= 0:  # no candidates: nothing to sum
+                continue
             lanes = narrow and n <= LANES
             centre = src[y, x]
             # With lanes every lane is written, those past the band too (finite, unused).

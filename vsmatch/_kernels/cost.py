@@ -28,6 +28,8 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
             cl = census_l[y, x]
             gl = grad_l[y, x]
             base = np.int64(lo[y, x])
+            if count[y, x] <= 0:  # no candidates (a held pixel): nothing to compute
+                continue
             # Candidates k with a right pixel: x - (base + k) >= 0.
             last = max(min(np.int64(count[y, x]), x + 1 - base), 0)
             # The right view comes reversed along x: right pixel x - d is at W - 1 - x + d,

@@ -206,12 +206,16 @@ def video_frame_count(path: str) -> int:
               help="As for 'vsmatch run': a rectified pair's calibration or a raw rig's.")
 @click.option("--max-frames", type=click.IntRange(min=1), default=None,
               help="Stop after this many frames.")
+@click.option("--temporal/--no-temporal", default=True, show_default=True,
+              help="Each frame searches near the last one's disparities and holds them "
+                   "where the image holds still (steadier depth, faster); --no-temporal "
+                   "matches every frame alone.")
 @config_option
 @verbosity_options
 @click.pass_context
 @friendly_errors
 def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_disp,
-          min_disp, calib, max_frames, config):
+          min_disp, calib, max_frames, temporal, config):
     """Match the frames of two videos (or of one side-by-side video, of two cameras
     given by index, or of two folders of frames paired by file name, as EuRoC's cam0/
     and cam1/) and write the disparity as a colour video.
@@ -235,7 +239,7 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
         except OSError as exc:
             raise click.ClickException(str(exc)) from None
     stereo = StereoMatcher(max_disp=max_disp, min_disp=min_disp, config=config,
-                           calib=list(calib) or None)
+                           calib=list(calib) or None, temporal=temporal)
     if len(names) == 2 and all(Path(name).is_dir() for name in names):
         sources, pairs = [], FolderPairs(*names)
         fps = pairs.fps() or 10.0
@@ -247,11 +251,14 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
     count, start = 0, time.perf_counter()
     quiet = ctx.find_root().obj.get("quiet")
 
+    full = 0  # frames that searched the whole range
+
     def pictures(frames_folder: Path | None):
-        nonlocal count
+        nonlocal count, full
         with tqdm(total=max_frames, disable=quiet, unit="frame", leave=False) as bar:
             for frame_l, frame_r in pairs:
                 result = stereo.result(frame_l, frame_r)
+                full += stereo.temporal is None or stereo.temporal.reason is not None
                 low, high = stereo.range or result.search_range
                 yield io.colour_disparity(result.disparity, high, low)
                 if frames_folder is not None:
@@ -281,7 +288,10 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
     verbose(ctx, f"{count} frames in {seconds:.1f} s ({count / seconds:.2f} fps), "
                  f"disparities {stereo.range[0]}..{stereo.range[1]}"
                  if stereo.range else f"{count} frames in {seconds:.1f} s")
-    echo(ctx, f"wrote {output} ({count} frames)")
+    rate = f", {count / seconds:.2f} fps" if count and seconds > 0 else ""
+    searched = (f"; {full} searched the whole range, {count - full} near the last frame"
+                if temporal else "")
+    echo(ctx, f"wrote {output} ({count} frames{rate}{searched})")
     if unpaired is not None:
         raise click.ClickException(unpaired)
 

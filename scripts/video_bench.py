@@ -1,0 +1,213 @@
+"""Video: flicker, trails, cuts and frame rate, as ../shared/docs/EVALUATION.md ("Video")
+describes, against per-frame matching and OpenCV SGBM in one run.
+
+    python scripts/video_bench.py [--data-root D] [--config default --config fast]
+                                  [--frames 8] [--json out.json] [--quick]
+
+Clips are made from real pairs with ground truth, each view with its own sensor noise
+(Gaussian, sigma = 2 grey levels, a new draw every frame, a fixed seed):
+- still: 8 frames of the pair: every change between frames is flicker;
+- sliding: a window of 85 % of the view moving 3 px right and 1 px down per frame, so the
+  true change of each pixel's disparity is the ground truth's under the window;
+- cut: four frames of one scene, then four of another (centre-cropped to a common size,
+  the wider range): the first frame after the cut against that frame matched alone.
+Each vsmatch config runs per frame (``temporal=False``) and as a stream
+(``temporal=True``); SGBM (block 3; HH without hole filling, and 5-direction) per frame.
+Measures, over pixels valid in two consecutive frames (and, sliding, with known truth in
+both): flicker = the share whose change differs from the true change by more than 1 px,
+the mean of that difference, the share of pixels switching validity; accuracy over the
+clip (bad 2.0 on Middlebury 2014, bad 1.0 on ETH3D, D1 on KITTI); frames per second after
+the first frame. Then frames per second at 640x480 and 1280x720, and the EuRoC clip's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from vsmatch import datasets, metrics  # noqa: E402
+from vsmatch.bench import upscaled_scene  # noqa: E402
+from vsmatch.matcher import StereoMatcher  # noqa: E402
+from vsmatch.peers import sgbm_matcher  # noqa: E402
+
+SCENES = [("middlebury2014-quarter", "Adirondack"), ("middlebury2014-quarter", "Piano"),
+          ("eth3d", "delivery_area_1l"), ("eth3d", "playground_1l"), ("kitti2015", "000000")]
+CUT = (("middlebury2014-quarter", "Adirondack"), ("middlebury2014-quarter", "Jadeplant"))
+NOISE, SEED = 2.0, 7
+WINDOW, STEP = 0.85, (1, 3)  # the window's share of the view; its step (down, right)
+
+
+def noisy(view: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    return np.clip(np.round(view + rng.normal(0, NOISE, view.shape)), 0, 255).astype(np.uint8)
+
+
+def still_clip(scene, frames: int, rng):
+    clip = [(noisy(scene.left, rng), noisy(scene.right, rng)) for _ in range(frames)]
+    return clip, [scene.ground_truth] * frames, [scene.masks["nonocc"]] * frames
+
+
+def sliding_clip(scene, frames: int, rng):
+    height, width = scene.left.shape[:2]
+    h, w = int(height * WINDOW), int(width * WINDOW)
+    top = (height - h) // 2 - STEP[0] * (frames - 1) // 2
+    left = (width - w) // 2 - STEP[1] * (frames - 1) // 2
+    clip, truths, masks = [], [], []
+    for k in range(frames):
+        rows = slice(top + STEP[0] * k, top + STEP[0] * k + h)
+        cols = slice(left + STEP[1] * k, left + STEP[1] * k + w)
+        clip.append((noisy(scene.left[rows, cols], rng), noisy(scene.right[rows, cols], rng)))
+        truths.append(scene.ground_truth[rows, cols])
+        masks.append(scene.masks["nonocc"][rows, cols])
+    return clip, truths, masks
+
+
+def centre_crop(image: np.ndarray, height: int, width: int) -> np.ndarray:
+    top, left = (image.shape[0] - height) // 2, (image.shape[1] - width) // 2
+    return image[top:top + height, left:left + width]
+
+
+def accuracy(kind: str, disp, truth, mask) -> float:
+    if kind == "kitti2015":
+        return metrics.kitti_measures(disp, truth, mask)["D1-all"]
+    return metrics.bad_percent(disp, truth, mask, 1.0 if kind == "eth3d" else 2.0)
+
+
+def flicker(out, truths, masks, still):
+    """Flicker share (%), mean change error (px), validity switches (%); ``still``: the
+    true change is 0 and every pixel valid in both frames counts."""
+    shares, means, switches = [], [], []
+    for a, b, ta, tb, ma, mb in zip(out, out[1:], truths, truths[1:], masks, masks[1:]):
+        both = np.isfinite(a) & np.isfinite(b)
+        known = both & ma & mb & np.isfinite(ta) & np.isfinite(tb)
+        pixels = both if still else known
+        error = np.abs((b - a) - (0 if still else (tb - ta)))[pixels]
+        shares.append(100 * np.mean(error > 1))
+        means.append(float(error.mean()))
+        switches.append(100 * np.mean(np.isfinite(a) != np.isfinite(b)))
+    return float(np.mean(shares)), float(np.mean(means)), float(np.mean(switches))
+
+
+def run_vsmatch(clip, max_disp, config, temporal):
+    matcher = StereoMatcher(max_disp=max_disp, config=config, temporal=temporal)
+    out, seconds, full = [], [], 0
+    for left, right in clip:
+        start = time.perf_counter()
+        out.append(matcher.compute(left, right))
+        seconds.append(time.perf_counter() - start)
+        full += temporal and matcher.temporal.reason is not None
+    return out, seconds
+
+
+def run_sgbm(clip, max_disp, mode):
+    matcher = sgbm_matcher(max_disp, mode=mode)
+    out, seconds = [], []
+    for left, right in clip:
+        start = time.perf_counter()
+        raw = matcher.compute(left, right)
+        seconds.append(time.perf_counter() - start)
+        disp = raw.astype(np.float32) / 16
+        disp[raw < 0] = np.inf  # no hole filling: its holes count as invalid
+        out.append(disp)
+    return out, seconds
+
+
+def methods(configs):
+    rows = []
+    for config in configs:
+        rows.append((f"{config} per frame", lambda c, m, cfg=config: run_vsmatch(c, m, cfg, False)))
+        rows.append((f"{config} temporal", lambda c, m, cfg=config: run_vsmatch(c, m, cfg, True)))
+    rows.append(("sgbm-hh", lambda c, m: run_sgbm(c, m, cv2.STEREO_SGBM_MODE_HH)))
+    rows.append(("sgbm-5", lambda c, m: run_sgbm(c, m, cv2.STEREO_SGBM_MODE_SGBM)))
+    return rows
+
+
+def fps(seconds):
+    return 1.0 / float(np.mean(seconds[1:]))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--data-root", default="../shared/data")
+    parser.add_argument("--config", action="append", default=None)
+    parser.add_argument("--frames", type=int, default=8)
+    parser.add_argument("--json", default=None)
+    parser.add_argument("--quick", action="store_true", help="One scene, no sizes.")
+    args = parser.parse_args()
+    configs = args.config or ["default", "fast"]
+    rows = methods(configs)
+    warm = datasets.load_dataset("middlebury2014-quarter", args.data_root, names=["Teddy"])[0]
+    for _, run in rows:  # compile every kernel before anything is timed
+        run([(warm.left, warm.right)] * 3, warm.max_disp)
+    report = {"still": {}, "sliding": {}, "cut": {}, "sizes": {}}
+    scenes = SCENES[:1] if args.quick else SCENES
+    for kind, name in scenes:
+        scene = datasets.load_dataset(kind, args.data_root, names=[name])[0]
+        for clip_name, make in (("still", still_clip), ("sliding", sliding_clip)):
+            rng = np.random.default_rng(SEED)
+            clip, truths, masks = make(scene, args.frames, rng)
+            for label, run in rows:
+                out, seconds = run(clip, scene.max_disp)
+                share, mean, switch = flicker(out, truths, masks, clip_name == "still")
+                acc = float(np.mean([accuracy(kind, d, t, m)
+                                     for d, t, m in zip(out, truths, masks)]))
+                report[clip_name].setdefault(label, []).append(
+                    {"scene": name, "flicker": share, "mean": mean, "switch": switch,
+                     "accuracy": acc, "fps": fps(seconds)})
+                print(f"{clip_name:8s} {name:18s} {label:18s} flicker {share:5.2f} % "
+                      f"mean {mean:.3f} px switch {switch:5.2f} % accuracy {acc:6.2f} "
+                      f"{fps(seconds):5.1f} fps", flush=True)
+    # The cut: four frames of one scene, then four of another, cropped to one size.
+    first, second = (datasets.load_dataset(k, args.data_root, names=[n])[0] for k, n in CUT)
+    height = min(first.left.shape[0], second.left.shape[0])
+    width = min(first.left.shape[1], second.left.shape[1])
+    rng = np.random.default_rng(SEED)
+    crop = [(centre_crop(s.left, height, width), centre_crop(s.right, height, width),
+             centre_crop(s.ground_truth, height, width),
+             centre_crop(s.masks["nonocc"], height, width)) for s in (first, second)]
+    clip = [(noisy(crop[k // 4][0], rng), noisy(crop[k // 4][1], rng)) for k in range(8)]
+    top = max(first.max_disp, second.max_disp)
+    for label, run in rows:
+        out, _ = run(clip, top)
+        after = accuracy("middlebury2014-quarter", out[4], crop[1][2], crop[1][3])
+        report["cut"][label] = after
+        print(f"cut      {CUT[0][1]}->{CUT[1][1]} {label:18s} first frame after the cut "
+              f"bad 2.0 {after:.2f}", flush=True)
+    if not args.quick:
+        base = datasets.load_dataset("middlebury2014-quarter", args.data_root,
+                                     names=["Adirondack"])[0]
+        for size in ((640, 480), (1280, 720)):
+            factor = size[0] / base.left.shape[1]
+            left, right, _, _, max_disp = upscaled_scene(base, factor)
+            left, right = (cv2.resize(v, size, interpolation=cv2.INTER_AREA)
+                           for v in (left, right))
+            rng = np.random.default_rng(SEED)
+            clip = [(noisy(left, rng), noisy(right, rng)) for _ in range(args.frames)]
+            for label, run in rows:
+                _, seconds = run(clip, max_disp)
+                report["sizes"].setdefault(f"{size[0]}x{size[1]}", {})[label] = fps(seconds)
+                print(f"size     {size[0]}x{size[1]} {label:18s} {fps(seconds):5.1f} fps",
+                      flush=True)
+    summary(report)
+    if args.json:
+        Path(args.json).write_text(json.dumps(report, indent=1))
+
+
+def summary(report) -> None:
+    print("\nmean over the scenes (flicker %, mean px, switch %, accuracy, fps):")
+    for clip_name in ("still", "sliding"):
+        for label, rows in report[clip_name].items():
+            means = [np.mean([r[k] for r in rows])
+                     for k in ("flicker", "mean", "switch", "accuracy", "fps")]
+            print(f"  {clip_name:8s} {label:18s} " + "  ".join(f"{v:6.2f}" for v in means))
+
+
+if __name__ == "__main__":
+    main()
