@@ -49,9 +49,14 @@ def noisy(view: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return np.clip(np.round(view + rng.normal(0, NOISE, view.shape)), 0, 255).astype(np.uint8)
 
 
+def evaluated(scene) -> np.ndarray:
+    """The pixels scored: the non-occluded ones, or all with truth (KITTI's)."""
+    return scene.masks.get("nonocc", scene.masks["all"])
+
+
 def still_clip(scene, frames: int, rng):
     clip = [(noisy(scene.left, rng), noisy(scene.right, rng)) for _ in range(frames)]
-    return clip, [scene.ground_truth] * frames, [scene.masks["nonocc"]] * frames
+    return clip, [scene.ground_truth] * frames, [evaluated(scene)] * frames
 
 
 def sliding_clip(scene, frames: int, rng):
@@ -65,7 +70,7 @@ def sliding_clip(scene, frames: int, rng):
         cols = slice(left + STEP[1] * k, left + STEP[1] * k + w)
         clip.append((noisy(scene.left[rows, cols], rng), noisy(scene.right[rows, cols], rng)))
         truths.append(scene.ground_truth[rows, cols])
-        masks.append(scene.masks["nonocc"][rows, cols])
+        masks.append(evaluated(scene)[rows, cols])
     return clip, truths, masks
 
 
@@ -76,7 +81,7 @@ def centre_crop(image: np.ndarray, height: int, width: int) -> np.ndarray:
 
 def accuracy(kind: str, disp, truth, mask) -> float:
     if kind == "kitti2015":
-        return metrics.kitti_measures(disp, truth, mask)["D1-all"]
+        return metrics.kitti_measures(disp, truth, mask)["D1"]
     return metrics.bad_percent(disp, truth, mask, 1.0 if kind == "eth3d" else 2.0)
 
 
@@ -86,9 +91,11 @@ def flicker(out, truths, masks, still):
     shares, means, switches = [], [], []
     for a, b, ta, tb, ma, mb in zip(out, out[1:], truths, truths[1:], masks, masks[1:]):
         both = np.isfinite(a) & np.isfinite(b)
-        known = both & ma & mb & np.isfinite(ta) & np.isfinite(tb)
-        pixels = both if still else known
-        error = np.abs((b - a) - (0 if still else (tb - ta)))[pixels]
+        if still:
+            error = np.abs(b - a)[both]
+        else:
+            known = both & ma & mb & np.isfinite(ta) & np.isfinite(tb)
+            error = np.abs((b - a) - (tb - ta))[known]
         shares.append(100 * np.mean(error > 1))
         means.append(float(error.mean()))
         switches.append(100 * np.mean(np.isfinite(a) != np.isfinite(b)))

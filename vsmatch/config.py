@@ -315,6 +315,9 @@ class TemporalConfig:
     cut: float = _param(0.2, 0.0, 1.0, doc=(
         "A cut (a full search): the grey-level histograms of two frames this far apart "
         "(total variation, 0 to 1; a camera that moves keeps its histogram)."))
+    planes: bool = _param(False, doc=(
+        "Fit slanted planes on frames searched near the last one too (the held pixels "
+        "keep the last full search's)."))
     collapse: float = _param(0.7, 0.0, 1.0, doc=(
         "A full search again when a frame's mean confidence falls below this share of the "
         "last full search's."))

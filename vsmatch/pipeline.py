@@ -5,6 +5,7 @@ when none is given."""
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import numpy as np
@@ -82,6 +83,8 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int, memory
     """Disparities near the last frame's (``vsmatch.temporal``), held where the image
     held still; the exposure correction and colour weight the last full search learnt."""
     cfg = memory.config
+    if not cfg.temporal.planes:
+        cfg = dataclasses.replace(cfg, planes=dataclasses.replace(cfg.planes, enabled=False))
     seconds: dict[str, float] = {}
     if memory.correction is not None:
         with timed(seconds, "photometric"):

@@ -59,6 +59,8 @@ def grey_of(view: np.ndarray) -> np.ndarray:
 
 #: Below this phase-correlation peak the views' shift is not trusted (taken as none).
 MIN_RESPONSE = 0.05
+#: A shift is taken when it leaves at most this share of the views' mean difference.
+SHIFT_GAIN = 0.9
 
 
 def image_shift(previous: np.ndarray, grey: np.ndarray) -> tuple[int, int]:
@@ -69,9 +71,24 @@ def image_shift(previous: np.ndarray, grey: np.ndarray) -> tuple[int, int]:
             for v in (previous, grey))
     window = cv2.createHanningWindow(a.shape[::-1], cv2.CV_32F)
     (dx, dy), response = cv2.phaseCorrelate(a, b, window)
-    if not response >= MIN_RESPONSE:
+    guess = int(round(2 * dy)), int(round(2 * dx))
+    if not response >= MIN_RESPONSE or guess == (0, 0):
         return 0, 0
-    return int(round(2 * dy)), int(round(2 * dx))
+    # The halved views' estimate is refined among its whole-pixel neighbours, and kept only
+    # when it brings the views closer: on a still view noise alone can tip the estimate
+    # over half a pixel, and a memory moved for nothing would drift.
+    margin = max(abs(guess[0]), abs(guess[1])) + 1
+    height, width = grey.shape
+    here = grey[margin:height - margin:2, margin:width - margin:2]
+
+    def difference(shift):
+        dy, dx = shift  # this frame's (y, x) shows the last one's (y - dy, x - dx)
+        there = previous[margin - dy:height - margin - dy:2, margin - dx:width - margin - dx:2]
+        return float(np.abs(here - there).mean())
+
+    candidates = [(guess[0] + i, guess[1] + j) for i in (-1, 0, 1) for j in (-1, 0, 1)]
+    best = min(candidates, key=difference)
+    return best if difference(best) < SHIFT_GAIN * difference((0, 0)) else (0, 0)
 
 
 def _moved(image: np.ndarray, dy: int, dx: int, fill) -> np.ndarray:
@@ -119,10 +136,10 @@ def full_search_reason(memory: Memory | None, grey: np.ndarray, max_disp: int,
         return "new size or range"
     if memory.since_full + 1 >= cfg.refresh:
         return "refresh"
-    if abs(float(grey.mean()) - float(memory.grey.mean())) > cfg.exposure_jump:
-        return "exposure"
     if histogram_distance(memory.grey, grey) > cfg.cut:
         return "cut"
+    if abs(float(grey.mean()) - float(memory.grey.mean())) > cfg.exposure_jump:
+        return "exposure"
     return None
 
 
@@ -132,7 +149,8 @@ HISTOGRAM_BINS = 32
 
 def histogram_distance(a: np.ndarray, b: np.ndarray) -> float:
     """Total variation between two views' grey-level histograms (0: the same, 1: apart)."""
-    h = [np.histogram(v, bins=HISTOGRAM_BINS, range=(0, 256))[0] / v.size for v in (a, b)]
+    h = [np.bincount(np.clip(v, 0, 255).astype(np.uint8).ravel() // (256 // HISTOGRAM_BINS),
+                     minlength=HISTOGRAM_BINS) / v.size for v in (a, b)]
     return 0.5 * float(np.abs(h[0] - h[1]).sum())
 
 
