@@ -305,8 +305,8 @@ class TemporalConfig:
         "far around."))
     band: int = _param(1, 0, 64, doc="Disparities added on each side of a band.")
     unsure: float = _param(0.5, 0.0, 1.0, doc=(
-        "Below this confidence the last estimate counts as unsure (its band as a changed "
-        "pixel's)."))
+        "Below this confidence the last estimate counts as unsure: searched again (around "
+        "itself) even where the image held still."))
     max_band: int = _param(12, 3, 4096, doc="Most candidates a pixel keeps.")
     hold: float = _param(0.8, 0.0, 1.0, doc=(
         "Where the image holds still, the share of the last disparity kept (0: none)."))

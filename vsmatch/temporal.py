@@ -1,14 +1,14 @@
 """Video: each frame searches near what the last one found.
 
 After a frame searched over the whole range, a frame's candidates are bands around the
-last frame's disparities (``vsmatch.bands``): the 3 x 3 range of the last disparities,
-widened to ``temporal.motion`` pixels around where the image changed or the last estimate
-was unsure. The whole range is searched again every ``temporal.refresh`` frames, on a cut
-(the grey-level histogram changed), after a jump in exposure and when a frame's confidence
-collapses.
-Where the image holds still, the last disparity is held: the new one moves only part of
-the way (``temporal.hold``), and a pixel that loses its estimate keeps the last one; where
-it changed, the new estimate counts alone, so that a moving object leaves no trail.
+last frame's disparities (``vsmatch.bands``), moved with the image: the 3 x 3 range of the
+last disparities, widened to ``temporal.motion`` pixels around where the image changed;
+still pixels whose estimate was sure are not searched again. The whole range is searched
+again every ``temporal.refresh`` frames, on a cut (the grey-level histogram changed), after
+a jump in exposure and when a frame's confidence collapses. Where the image holds still,
+the last disparity is held: the new one moves only part of the way (``temporal.hold``),
+and a pixel that loses its estimate keeps the last one; where it changed, the new estimate
+counts alone, so that a moving object leaves no trail.
 """
 
 from __future__ import annotations
@@ -168,12 +168,15 @@ def _extremes(disparity: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]
 
 def bands_from_previous(memory: Memory, moved: np.ndarray, cfg: TemporalConfig
                         ) -> band_tools.Bands:
-    """Each pixel's candidates: the last frame's 3 x 3 range widened by ``band``, and
-    where the image moved or the last estimate was unsure, its range over ``motion``
-    pixels around."""
+    """Each pixel's candidates: the last frame's 3 x 3 range widened by ``band``; where the
+    image moved, its range over ``motion`` pixels around; none where the image held still
+    and the last estimate was sure (the pixel keeps it). An unsure estimate is searched
+    again around itself (a range over the motion window let it jump between frames: KITTI's
+    still road 9.80 against 9.44 per frame, now 9.44)."""
     previous = memory.disparity
     low, high = _extremes(previous, 3)
-    wide = moved | (memory.confidence < cfg.unsure)
+    unsure = memory.confidence < cfg.unsure
+    wide = moved
     if cfg.motion > 0:
         low_far, high_far = _extremes(previous, 2 * cfg.motion + 1)
         low = np.where(wide, low_far, low)
@@ -184,7 +187,7 @@ def bands_from_previous(memory: Memory, moved: np.ndarray, cfg: TemporalConfig
                                   memory.max_disp + 1, cfg.max_band)
     # Still, sure pixels are not searched again: they keep the last disparity, and serve
     # the searched ones as consistent neighbours.
-    held = ~wide & np.isfinite(previous)
+    held = ~wide & ~unsure & np.isfinite(previous)
     bands.count[held] = 0
     return dataclasses.replace(bands, held=np.where(held, previous, np.inf).astype(np.float32))
 
