@@ -84,20 +84,26 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int,
             volume = optimization.scanline_optimise(volume, left, right, cfg.scanline,
                                                     out=work, bands=bands)
 
-    with stage("wta"):  # with the winners' cost curves, for the confidence
-        if cfg.consistency.enabled:
-            disp_l, disp_r, curves = disparity.winner_takes_all_with_curve(volume,
-                                                                           bands=bands)
+    # The winners' cost curves feed the confidence; a band's curve is short, so the caller
+    # brings whole-range ones (the coarse level's, the last full search's).
+    whole_range = bands is None or bands.is_full
+    curve = None
+    with stage("wta"):
+        if cfg.consistency.enabled and whole_range:
+            disp_l, disp_r, curves = disparity.winner_takes_all_with_curve(volume)
+        elif cfg.consistency.enabled:
+            disp_l, disp_r = disparity.winner_takes_all_both(volume, bands)
         else:
             disp_l = disparity.winner_takes_all(volume, bands)
-            curves = confidence.cost_curves(volume, disp_l, bands)
-    with stage("confidence"):
-        curve = confidence.curve_features(curves, arms_l)
-        if aggregated is not volume:  # the same margin before the scanline optimisation
-            raw = confidence.cost_curves(aggregated, disp_l, bands)
-            curve["raw_margin"] = confidence.curve_features(raw, None)["margin"]
-        else:
-            curve["raw_margin"] = curve["margin"]
+            curves = confidence.cost_curves(volume, disp_l) if whole_range else None
+    if whole_range:
+        with stage("confidence"):
+            curve = confidence.curve_features(curves, arms_l)
+            if aggregated is not volume:  # the same margin before the scanline optimisation
+                raw = confidence.cost_curves(aggregated, disp_l)
+                curve["raw_margin"] = confidence.curve_features(raw, None)["margin"]
+            else:
+                curve["raw_margin"] = curve["margin"]
 
     labels = None
     if cfg.consistency.enabled:

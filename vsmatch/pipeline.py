@@ -94,9 +94,7 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int, memory
     result = scale.in_stripes(solve, left, right, max_disp, cfg, bands)
     result.seconds = {**seconds, **result.seconds}
     result.photometric, result.exposed = memory.correction, cfg
-    # A band's cost curve is short: the last full search's stand where nothing moved.
-    result.curve = {name: np.where(moved, values, memory.curve[name])
-                    for name, values in result.curve.items()}
+    result.curve = memory.curve  # the last full search's (a band's curve is short)
     result = _finish(result, left, max_disp, before_confidence=functools.partial(
         video.hold, memory.disparity, moved=moved, cfg=cfg.temporal))
     return result

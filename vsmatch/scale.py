@@ -161,18 +161,21 @@ def in_stripes(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp: int
         cfg = dataclasses.replace(cfg, noise=dataclasses.replace(cfg.noise, adapt=False))
     disp = np.empty((height, width), dtype=np.float32)
     labels = None
-    curve = {name: np.empty((height, width), np.float32) for name in confidence.CURVE_FEATURES}
+    curve = None
     seconds: dict[str, float] = {}
     for first, stop, core_first, core_stop in layout:
         part = solve(left[first:stop], right[first:stop], max_disp, cfg,
-                            None if bands is None else bands.rows(first, stop))
+                     None if bands is None else bands.rows(first, stop))
+        if part.curve is not None and curve is None:
+            curve = {name: np.empty((height, width), np.float32)
+                     for name in confidence.CURVE_FEATURES}
         core = slice(core_first - first, core_stop - first)
         disp[core_first:core_stop] = part.disparity[core]
         if part.labels is not None:
             if labels is None:
                 labels = np.empty((height, width), dtype=np.uint8)
             labels[core_first:core_stop] = part.labels[core]
-        for name, values in part.curve.items():
+        for name, values in (part.curve or {}).items():
             curve[name][core_first:core_stop] = values[core]
         for name, value in part.seconds.items():
             seconds[name] = seconds.get(name, 0.0) + value

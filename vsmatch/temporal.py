@@ -36,7 +36,7 @@ class Memory:
     disparity: np.ndarray  # float32, inf where there is no estimate
     confidence: np.ndarray
     grey: np.ndarray  # the left view, float32
-    curve: dict[str, np.ndarray]  # the cost-curve features, from the last full search on
+    curve: dict[str, np.ndarray]  # the cost-curve features of the last full search
     config: Config  # the config as used after the exposure correction
     correction: object  # photometric.Correction or None
     full_confidence: float  # the mean confidence of the last full search
@@ -177,7 +177,7 @@ def bands_from_previous(memory: Memory, moved: np.ndarray, cfg: TemporalConfig
     low, high = _extremes(previous, 3)
     unsure = memory.confidence < cfg.unsure
     wide = moved
-    if cfg.motion > 0:
+    if cfg.motion > 0 and wide.any():
         low_far, high_far = _extremes(previous, 2 * cfg.motion + 1)
         low = np.where(wide, low_far, low)
         high = np.where(wide, high_far, high)
@@ -210,11 +210,11 @@ def remember(result, grey: np.ndarray, max_disp: int, memory: Memory | None = No
              ) -> Memory:
     """The memory a frame's result (``MatchResult``, matched from 0) leaves the next frame:
     a full search's anew (``memory`` None), a band search's added to the last."""
-    curve = {name: values.copy() for name, values in result.curve.items()}
     if memory is None:
+        curve = {name: values.copy() for name, values in result.curve.items()}
         return Memory(grey.shape, int(max_disp), result.disparity.copy(),
                       result.confidence.copy(), grey, curve, result.exposed,
                       result.photometric, float(result.confidence.mean()))
     return Memory(memory.shape, memory.max_disp, result.disparity.copy(),
-                  result.confidence.copy(), grey, curve, memory.config, memory.correction,
+                  result.confidence.copy(), grey, memory.curve, memory.config, memory.correction,
                   memory.full_confidence, memory.since_full + 1)
