@@ -2,9 +2,9 @@
 
 Timings of the matching itself come from one process, vsmatch's configs and SGBM's modes
 alternating on the same images after a warm-up call, the fastest of the rounds kept, so
-the ratios hold on a shared, noisy machine: the twelve standard pairs (the four
-middlebury2 pairs and the eight Middlebury 2014 pairs at quarter size, each with its
-official range), with each method's error on them (the time-error trade-off,
+the ratios hold on a shared, noisy machine: the standard pairs (the four middlebury2
+pairs and the Middlebury 2014 pairs at quarter size in the data, each with its official
+range), with each method's error on them (the time-error trade-off,
 ``--plot``). Start-up and memory are measured in child processes: a first call with an
 empty compilation cache, the whole ``vsmatch run`` command with a warm cache, the peak
 resident memory of a pair, and the size series: Adirondack (Middlebury 2014) as it is,
@@ -52,7 +52,8 @@ SIZE_PEERS = ("sgbm-5", "sgbm-hh")
 
 
 def standard_pairs(data_root=None) -> list[tuple[Any, evaluation.Scoring]]:
-    """The twelve standard pairs, each with its dataset's scoring."""
+    """The standard pairs (every middlebury2 and Middlebury 2014 quarter pair in the data),
+    each with its dataset's scoring."""
     return [(scene, evaluation.scoring_for(name)) for name in STANDARD_DATASETS
             for scene in datasets.load_dataset(name, data_root)]
 
@@ -346,13 +347,14 @@ def run_benchmark(data_root=None, configs=BENCH_CONFIGS, rounds: int = 5,
 
 
 def tradeoff_figure(report: dict[str, Any]) -> np.ndarray:
-    """Time against error on the twelve pairs, a point per config and SGBM mode."""
+    """Time against error on the standard pairs, a point per config and SGBM mode."""
     from .figure import tradeoff_plot
 
     total = report["pairs"]["total"]
     points = {name: (total[name]["seconds"], total[name]["error"])
               for name in report["pairs"]["methods"]}
-    return tradeoff_plot(points, x_label="seconds, the 12 standard pairs (fastest of "
+    count = len(report["pairs"]["scenes"])
+    return tradeoff_plot(points, x_label=f"seconds, the {count} standard pairs (fastest of "
                          f"{report['pairs']['rounds']})", y_label="error (%)",
                          title="time against error: lower left is better")
 

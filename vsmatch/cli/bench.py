@@ -41,7 +41,7 @@ def bench_command(ctx, data_root, configs, rounds, no_cold, no_size, json_path, 
     """Time vsmatch's configs against OpenCV StereoSGBM (block size 3) on the standard
     pairs and at size.
 
-    On the twelve standard pairs (middlebury2 and Middlebury 2014 at quarter size): each
+    On the standard pairs (middlebury2 and Middlebury 2014 at quarter size): each
     config and SGBM's 5-direction, HH and 3-way modes in one process, alternating, the
     fastest of the rounds; their ratios to SGBM HH and 5-direction, each one's error on
     the pairs, and each config's stage times. Then, for the first config: start-up with
