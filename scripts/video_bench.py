@@ -104,12 +104,11 @@ def flicker(out, truths, masks, still):
 
 def run_vsmatch(clip, max_disp, config, temporal):
     matcher = StereoMatcher(max_disp=max_disp, config=config, temporal=temporal)
-    out, seconds, full = [], [], 0
+    out, seconds = [], []
     for left, right in clip:
         start = time.perf_counter()
         out.append(matcher.compute(left, right))
         seconds.append(time.perf_counter() - start)
-        full += temporal and matcher.temporal.reason is not None
     return out, seconds
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 
@@ -45,6 +46,19 @@ class Bands:
 def of(volume: np.ndarray, bands: Bands | None) -> Bands:
     """``bands``, or the whole range of ``volume`` (H, W, D) when None."""
     return Bands.full(volume.shape[:2], volume.shape[2]) if bands is None else bands
+
+
+def extremes(disparity: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest and largest finite disparity over each pixel's ``size`` x ``size``
+    neighbourhood (float32; inf and -inf where there is none): the span a band around an
+    earlier estimate starts from."""
+    finite = np.isfinite(disparity)
+    kernel = np.ones((size, size), np.uint8)
+    low = cv2.erode(np.where(finite, disparity, np.inf).astype(np.float32), kernel,
+                    borderType=cv2.BORDER_REPLICATE)
+    high = cv2.dilate(np.where(finite, disparity, -np.inf).astype(np.float32), kernel,
+                      borderType=cv2.BORDER_REPLICATE)
+    return low, high
 
 
 def around(low: np.ndarray, high: np.ndarray, centre: np.ndarray, n_disp: int,

@@ -105,14 +105,16 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int,
             else:
                 curve["raw_margin"] = curve["margin"]
 
+    # Pixels searched no more keep the disparity they hold, and count as consistent.
+    held = None if bands is None or bands.held is None else np.isfinite(bands.held)
+    if held is not None:
+        disp_l[held] = np.rint(bands.held[held])
     labels = None
     if cfg.consistency.enabled:
         with stage("consistency"):
             labels = disparity.left_right_check(disp_l, disp_r, n_disp=n_disp,
                                                 tolerance=cfg.consistency.tolerance)
-        if bands is not None and bands.held is not None:  # as found before: consistent
-            held = np.isfinite(bands.held)
-            disp_l[held] = np.rint(bands.held[held])
+        if held is not None:
             labels[held] = disparity.VALID
         if cfg.voting.enabled:
             with stage("voting"):
@@ -124,9 +126,6 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int,
             else:
                 result = disparity.mark_rejected(disp_l, labels)
     else:
-        if bands is not None and bands.held is not None:
-            held = np.isfinite(bands.held)
-            disp_l[held] = np.rint(bands.held[held])
         result = disp_l.astype(np.float32)
         result[disp_l < 0] = INVALID_DISPARITY  # no candidate in the pixel's band
 

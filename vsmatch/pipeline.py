@@ -75,7 +75,8 @@ def _search_whole_range(left: np.ndarray, right: np.ndarray, max_disp: int,
     result.seconds = {**seconds, **result.seconds}
     result.photometric = correction
     result.exposed = cfg
-    return _finish(result, left, max_disp)
+    _fit_planes(result, left, max_disp)
+    return _with_confidence(result, left, max_disp)
 
 
 def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int, memory: Memory,
@@ -95,14 +96,13 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int, memory
     result.seconds = {**seconds, **result.seconds}
     result.photometric, result.exposed = memory.correction, cfg
     result.curve = memory.curve  # the last full search's (a band's curve is short)
-    result = _finish(result, left, max_disp, before_confidence=functools.partial(
-        video.hold, memory.disparity, moved=moved, cfg=cfg.temporal))
-    return result
+    _fit_planes(result, left, max_disp)
+    result.disparity = video.hold(memory.disparity, result.disparity, moved, cfg.temporal)
+    return _with_confidence(result, left, max_disp)
 
 
-def _finish(result: MatchResult, left: np.ndarray, max_disp: int,
-            before_confidence=None) -> MatchResult:
-    """Planes, the range's limits and the confidence."""
+def _fit_planes(result: MatchResult, left: np.ndarray, max_disp: int) -> None:
+    """Slanted planes (when on) and the range's limits, into ``result``."""
     # 3. Slanted planes over depth-aware regions.
     adapted = result.config  # with the noise adaptation's changes
     if adapted.planes.enabled and result.labels is not None:
@@ -113,8 +113,10 @@ def _finish(result: MatchResult, left: np.ndarray, max_disp: int,
     # range's end or a plane's fill stops at the end (the confidence marks such pixels).
     finite = np.isfinite(result.disparity)
     result.disparity[finite] = np.clip(result.disparity[finite], 0, max_disp)
-    if before_confidence is not None:
-        result.disparity = before_confidence(result.disparity)
+
+
+def _with_confidence(result: MatchResult, left: np.ndarray, max_disp: int) -> MatchResult:
+    """``result`` with how likely each disparity is right."""
     # 4. How likely each disparity is right.
     with timed(result.seconds, "confidence"):
         result.confidence = confidence.confidence_map(result.disparity, result.labels, left,

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 
-import cv2
 import numpy as np
 
 from . import bands
@@ -65,11 +64,7 @@ def coarse_extremes(coarse: np.ndarray, coarse_labels: np.ndarray | None
     own filled value only: the neighbours' disparities there are mostly the occluder's.
     """
     valid = np.isfinite(coarse)
-    kernel = np.ones((3, 3), np.uint8)
-    low = cv2.erode(np.where(valid, coarse, np.inf).astype(np.float32), kernel,
-                    borderType=cv2.BORDER_REPLICATE)
-    high = cv2.dilate(np.where(valid, coarse, -np.inf).astype(np.float32), kernel,
-                      borderType=cv2.BORDER_REPLICATE)
+    low, high = bands.extremes(coarse, 3)
     if coarse_labels is not None:
         unsure = (coarse_labels != VALID) & valid
         low[unsure] = coarse[unsure]

@@ -154,18 +154,6 @@ def histogram_distance(a: np.ndarray, b: np.ndarray) -> float:
     return 0.5 * float(np.abs(h[0] - h[1]).sum())
 
 
-def _extremes(disparity: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
-    """Smallest and largest finite disparity over each pixel's ``size`` x ``size``
-    neighbourhood (inf and -inf where there is none)."""
-    finite = np.isfinite(disparity)
-    kernel = np.ones((size, size), np.uint8)
-    low = cv2.erode(np.where(finite, disparity, np.inf).astype(np.float32), kernel,
-                    borderType=cv2.BORDER_REPLICATE)
-    high = cv2.dilate(np.where(finite, disparity, -np.inf).astype(np.float32), kernel,
-                      borderType=cv2.BORDER_REPLICATE)
-    return low, high
-
-
 def bands_from_previous(memory: Memory, moved: np.ndarray, cfg: TemporalConfig
                         ) -> band_tools.Bands:
     """Each pixel's candidates: the last frame's 3 x 3 range widened by ``band``; where the
@@ -174,11 +162,11 @@ def bands_from_previous(memory: Memory, moved: np.ndarray, cfg: TemporalConfig
     again around itself (a range over the motion window let it jump between frames: on
     KITTI's still road D1 9.80, around itself 9.60, per frame 9.44; scripts/video_bench.py)."""
     previous = memory.disparity
-    low, high = _extremes(previous, 3)
+    low, high = band_tools.extremes(previous, 3)
     unsure = memory.confidence < cfg.unsure
     wide = moved
     if cfg.motion > 0 and wide.any():
-        low_far, high_far = _extremes(previous, 2 * cfg.motion + 1)
+        low_far, high_far = band_tools.extremes(previous, 2 * cfg.motion + 1)
         low = np.where(wide, low_far, low)
         high = np.where(wide, high_far, high)
     with np.errstate(invalid="ignore"):

@@ -18,18 +18,22 @@ def path_step(prev, d, p1, p2_total):
     return best if best < jump else jump
 
 
-def _path_steps(write):
+def _path_steps(write, lanes):
     """The two steps of the path recursion, adding ``weight`` x the path cost to ``dst``,
     or with ``write`` (a constant to the compiler, so no test is left in the loops, which
     would stop LLVM vectorising them) writing it: the first walk of a volume writes every
-    cell, so the volume needs no zeroing beforehand."""
+    cell, so the volume needs no zeroing beforehand. With ``lanes`` (a constant too) a
+    step takes :data:`LANES` candidates, one vector where a narrow band's short loop would
+    not vectorise; those from the band's ``n`` on are infinite."""
 
     @njit(inline="always")
-    def first_step(src, dst, cur, weight, n_disp):
+    def first_step(src, dst, cur, weight, n):
         """The path starts: its cost is the matching cost. Returns its minimum over d."""
         new_min = np.float32(np.inf)
-        for d in range(n_disp):
+        for d in range(LANES if lanes else n):
             v = src[d]
+            if lanes:
+                v = v if d < n else np.float32(np.inf)
             cur[d + 1] = v
             if write:
                 dst[d] = weight * v
@@ -40,7 +44,7 @@ def _path_steps(write):
 
     @njit(inline="always")
     def next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, prev_min,
-                  weight, n_disp, bits):
+                  weight, n, bits):
         """One step of the path recursion over all d; returns the new minimum over d.
 
         ``prev``, ``cur``: path costs at 1 + d, with inf at both ends so that d - 1 and
@@ -50,9 +54,12 @@ def _path_steps(write):
         with ``a if a < b else b`` rather than ``min``, whose NaN handling Numba compiles
         into branches that stop it.
         """
-        for d in range(n_disp):
+        span = LANES if lanes else n
+        for d in range(span):
             c = change_r[d]
             v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - prev_min
+            if lanes:
+                v = v if d < n else np.float32(np.inf)
             cur[d + 1] = v
             if write:
                 dst[d] = weight * v
@@ -61,84 +68,51 @@ def _path_steps(write):
         # Path costs are >= 0, where float32 bit patterns order like int32: an integer
         # minimum vectorises, a float one does not.
         smallest = cur_bits[1]
-        for d in range(n_disp):
+        for d in range(span):
             b = cur_bits[d + 1]
             smallest = b if b < smallest else smallest
         bits[0] = smallest
         return bits.view(np.float32)[0]
 
-    @njit(inline="always")
-    def first_lanes(src, dst, cur, weight, valid):
-        """:func:`first_step` over :data:`LANES` candidates, those from ``valid`` on
-        outside the band: infinite."""
-        new_min = np.float32(np.inf)
-        for d in range(LANES):
-            v = src[d] if d < valid else np.float32(np.inf)
-            cur[d + 1] = v
-            if write:
-                dst[d] = weight * v
-            else:
-                dst[d] += weight * v
-            new_min = v if v < new_min else new_min
-        return new_min
-
-    @njit(inline="always")
-    def next_lanes(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, prev_min,
-                   weight, valid, bits):
-        """:func:`next_step` over :data:`LANES` candidates, those from ``valid`` on outside
-        the band: infinite. One vector where a band's short loop would not vectorise."""
-        for d in range(LANES):
-            c = change_r[d]
-            v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - prev_min
-            v = v if d < valid else np.float32(np.inf)
-            cur[d + 1] = v
-            if write:
-                dst[d] = weight * v
-            else:
-                dst[d] += weight * v
-        smallest = cur_bits[1]
-        for d in range(LANES):
-            b = cur_bits[d + 1]
-            smallest = b if b < smallest else smallest
-        bits[0] = smallest
-        return bits.view(np.float32)[0]
-
-    return first_step, next_step, first_lanes, next_lanes
+    return first_step, next_step
 
 
 #: Candidates a narrow band's path step takes at once: one vector of float32.
 LANES = 8
 
-_first_step, _next_step, _first_lanes, _next_lanes = _path_steps(False)
-(_first_step_write, _next_step_write, _first_lanes_write,
- _next_lanes_write) = _path_steps(True)
+_first_step, _next_step = _path_steps(False, False)
+_first_step_write, _next_step_write = _path_steps(True, False)
+_first_lanes, _next_lanes = _path_steps(False, True)
+_first_lanes_write, _next_lanes_write = _path_steps(True, True)
 
 
 @njit(inline="always")
-def _lanes_step(src, dst, change_l, change_r_rev, p1s, p2s, weight, write, ey, ex, width, base,
-                n,
-                prev_lo, prev_n, m, prev, cur, cur_bits, tmp, bits):
-    """A band of at most :data:`LANES` candidates' path step (``_walk_steps``' step)."""
-    if prev_n < 0:
+def _first(src, dst, cur, weight, n, write, lanes):
+    """The step that starts a path, of the kind ``write`` and ``lanes`` ask for."""
+    if lanes:
         if write:
-            new_min = _first_lanes_write(src, dst, cur, weight, n)
-        else:
-            new_min = _first_lanes(src, dst, cur, weight, n)
-    else:
-        if base != prev_lo or n != prev_n:
-            _rebase(prev, tmp, base - prev_lo, prev_n, max(n, np.int64(LANES)))
-        cl = change_l[ey, ex]
-        change_r = change_r_rev[ey, width - 1 - ex + base:]
-        p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
+            return _first_lanes_write(src, dst, cur, weight, n)
+        return _first_lanes(src, dst, cur, weight, n)
+    if write:
+        return _first_step_write(src, dst, cur, weight, n)
+    return _first_step(src, dst, cur, weight, n)
+
+
+@njit(inline="always")
+def _next(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, m, weight, n, bits,
+          write, lanes):
+    """The next step of a path, of the kind ``write`` and ``lanes`` ask for."""
+    if lanes:
         if write:
-            new_min = _next_lanes_write(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
-                                        p2b, m, weight, n, bits)
-        else:
-            new_min = _next_lanes(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b,
-                                  m, weight, n, bits)
-    cur[0] = np.float32(np.inf)
-    cur[LANES + 1] = np.float32(np.inf)
-    return base, n, new_min
+            return _next_lanes_write(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
+                                     p2b, m, weight, n, bits)
+        return _next_lanes(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, m,
+                           weight, n, bits)
+    if write:
+        return _next_step_write(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b,
+                                m, weight, n, bits)
+    return _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, m, weight,
+                      n, bits)
 
 
 @njit(inline="always")
@@ -172,32 +146,27 @@ def _walk_steps(banded):
             return base, np.int64(-1), m
         src = cost[y, x]
         dst = out[y, x]
-        if banded and n <= LANES and cost.shape[2] >= LANES:
-            return _lanes_step(src, dst, change_l, change_r_rev, p1s, p2s, weight, write, ey,
-                               ex, width, base, n, prev_lo, prev_n, m, prev, cur, cur_bits,
-                               tmp, bits)
+        # A narrow band in a volume deep enough takes one vector a step.
+        lanes = banded and n <= LANES and cost.shape[2] >= LANES
         if prev_n < 0:  # the path starts: its cost is the matching cost
-            if write:
-                new_min = _first_step_write(src, dst, cur, weight, n)
-            else:
-                new_min = _first_step(src, dst, cur, weight, n)
+            new_min = _first(src, dst, cur, weight, n, write, lanes)
         else:
             if banded and (base != prev_lo or n != prev_n):
-                _rebase(prev, tmp, base - prev_lo, prev_n, n)
+                # A vector's step reads the path costs of all its lanes.
+                _rebase(prev, tmp, base - prev_lo, prev_n,
+                        max(n, np.int64(LANES)) if lanes else n)
             cl = change_l[ey, ex]
             change_r = change_r_rev[ey, width - 1 - ex + base:]
             p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
-            if write:
-                new_min = _next_step_write(src, dst, prev, cur, cur_bits, change_r, p1a, p1b,
-                                           p2a, p2b, m, weight, n, bits)
-            else:
-                new_min = _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
-                                     p2b, m, weight, n, bits)
+            new_min = _next(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, m,
+                            weight, n, bits, write, lanes)
         if banded:
             # Past the band's ends the path is infinite (an earlier, wider band may have
             # left values there).
             cur[0] = np.float32(np.inf)
             cur[n + 1] = np.float32(np.inf)
+            if lanes:
+                cur[LANES + 1] = np.float32(np.inf)
         return base, n, new_min
 
     return walk_step
