@@ -114,3 +114,38 @@ def test_pipeline_reports_the_adapted_config(rng):
     cfg = config_from_dict({"noise": {"adapt": True, "floor": 0.0}})
     result = pipeline.run(left, right, max_disp=6, config=cfg)
     assert result.noise_sigma > 0 and result.config.arms.tau1 > cfg.arms.tau1
+
+
+def test_the_noise_is_measured_once_per_pair_whatever_the_levels_and_stripes(rng, monkeypatch):
+    """Measured on the input views only: every level and stripe adapts to that one figure
+    (a level down, scaled as ``cv2.pyrDown`` scales white noise)."""
+    from vsmatch import noise, pipeline, scale
+    from vsmatch.config import config_from_dict, load_config
+
+    from conftest import random_pair
+
+    measured = []
+    real = noise.estimate_noise
+    monkeypatch.setattr(noise, "estimate_noise", lambda image: measured.append(image.shape)
+                        or real(image))
+    left, right = random_pair(rng, height=96, width=160, shift=3)
+    cfg = config_from_dict({"noise": {"adapt": True, "floor": 0.0},
+                            "pyramid": {"min_levels": 1}, "memory": {"overlap": 8}},
+                           base=load_config("fast"))
+    monkeypatch.setattr(scale, "stripe_rows", lambda *args: 40)  # stripes of a small pair
+    result = pipeline.run(left, right, max_disp=24, config=cfg)
+    assert result.levels == 1 and result.stripes > 1
+    assert measured == [left.shape, right.shape]
+    sigma = noise.estimate_pair_noise(left, right)
+    assert result.noise_sigma == sigma
+    assert result.config == noise.adapt_to_noise(cfg, sigma)  # the full size's, reported
+
+
+def test_a_level_down_white_noise_shrinks_as_the_pyramid_factor_says():
+    import cv2
+
+    from vsmatch.noise import LEVEL_NOISE_FACTOR
+
+    field = np.random.default_rng(0).standard_normal((600, 600)).astype(np.float32) * 20
+    measured = cv2.pyrDown(field)[10:-10, 10:-10].std() / field.std()
+    assert LEVEL_NOISE_FACTOR == pytest.approx(measured, rel=0.03)

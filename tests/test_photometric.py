@@ -64,10 +64,10 @@ def test_fade_bounds_are_checked():
 def test_the_pipeline_learns_an_exposure_change_and_keeps_the_colour_term():
     pair = make_pair(width=240, height=180)
     same = pipeline.run(pair.left, pair.right, max_disp=pair.max_disp)
-    assert same.photometric.before < 3 and same.config.cost.ad_weight == 1.0
+    assert same.photometric.before < 3 and same.colour_weight == 1.0
     brighter = pipeline.run(pair.left, _exposed(pair.right // 2 + 40), max_disp=pair.max_disp)
     assert brighter.photometric.before > 20 and brighter.photometric.residual < 3
-    assert brighter.config.cost.ad_weight == 1.0
+    assert brighter.colour_weight == 1.0
     bad = {name: float(np.mean(np.abs(r.disparity - pair.disparity)[pair.nonocc] > 1))
            for name, r in (("same", same), ("brighter", brighter))}
     assert bad["brighter"] < bad["same"] + 0.02, bad
@@ -90,7 +90,7 @@ def test_exposure_and_lighting_scenes_gain(data_dir, name, with_stage, without):
     assert figures["on"] <= with_stage and figures["off"] > without, figures
     if name == "PianoL":  # the light moved: no colour map explains it
         fit = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp)
-        assert fit.photometric.excess > 10 and fit.config.cost.ad_weight == 0.0
+        assert fit.photometric.excess > 10 and fit.colour_weight == 0.0
 
 
 def test_verbose_run_reports_the_exposure_map(tmp_path):

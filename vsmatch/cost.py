@@ -47,9 +47,11 @@ def rho(cost: np.ndarray | float, lam: float) -> np.ndarray | float:
     return 1.0 - np.exp(-np.asarray(cost, dtype=np.float64) / lam)
 
 
-def max_cost(cfg: CostConfig) -> float:
-    """The cost given where the right pixel does not exist: every term at its limit 1."""
-    return 1.0 + (cfg.lambda_gradient is not None) + (cfg.lambda_ad is not None) * cfg.ad_weight
+def max_cost(cfg: CostConfig, colour_weight: float = 1.0) -> float:
+    """The cost given where the right pixel does not exist: every term at its limit 1
+    (the colour term's, ``cost.ad_weight`` x ``colour_weight``)."""
+    return (1.0 + (cfg.lambda_gradient is not None)
+            + (cfg.lambda_ad is not None) * (cfg.ad_weight * colour_weight))
 
 
 #: Gradient magnitudes are quantised to this many steps per grey level for the table
@@ -74,11 +76,12 @@ def zero_mean_colour(colour: np.ndarray, box: int) -> np.ndarray:
 def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
                census_l: np.ndarray, census_r: np.ndarray,
                grad_l: np.ndarray, grad_r: np.ndarray, cfg: CostConfig,
-               planar: bool = False) -> tuple:
+               planar: bool = False, colour_weight: float = 1.0) -> tuple:
     """The arguments the cost kernels take after the output: each view's census, quantised
     gradient and colour (the right view's reversed along x), the three lookup tables (an
     empty one switches its term off) and the maximum cost. ``planar``: the colours as
-    planes (C, H, W) rather than (H, W, C)."""
+    planes (C, H, W) rather than (H, W, C); ``colour_weight``: what the exposure correction
+    leaves of the colour term (times ``cost.ad_weight``)."""
     n_bits = cfg.census_width * cfg.census_height - 1
     census_table = rho(np.arange(n_bits + 1), cfg.lambda_census).astype(np.float32)
     colour_l, colour_r = (zero_mean_colour(c, cfg.ad_mean_box) for c in (colour_l, colour_r))
@@ -93,26 +96,30 @@ def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
     else:
         steps = np.arange(max(q_l.max(), q_r.max()) + 1) / GRADIENT_STEPS
         grad_table = rho(steps, cfg.lambda_gradient).astype(np.float32)
-    if cfg.lambda_ad is None or cfg.ad_weight == 0:
+    ad_weight = cfg.ad_weight * colour_weight
+    if cfg.lambda_ad is None or ad_weight == 0:
         ad_table = np.empty(0, np.float32)
     else:
-        ad_table = (cfg.ad_weight * rho(np.arange(255 * channels + 1) / channels,
-                                        cfg.lambda_ad)).astype(np.float32)
+        ad_table = (ad_weight * rho(np.arange(255 * channels + 1) / channels,
+                                    cfg.lambda_ad)).astype(np.float32)
     colour_r_rev = mirrored(colour_r, axis=-1 if planar else 1)
     return (census_l, mirrored(census_r, axis=1), q_l, mirrored(q_r, axis=1),
             colour_l, colour_r_rev, census_table, grad_table, ad_table,
-            np.float32(max_cost(cfg)))
+            np.float32(max_cost(cfg, colour_weight)))
 
 
 def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
                 census_l: np.ndarray, census_r: np.ndarray,
                 grad_l: np.ndarray, grad_r: np.ndarray,
-                *, n_disp: int, cfg: CostConfig, bands: Bands | None = None) -> np.ndarray:
+                *, n_disp: int, cfg: CostConfig, bands: Bands | None = None,
+                colour_weight: float = 1.0) -> np.ndarray:
     """The matching cost volume ``(H, W, B)`` float32 (ALGORITHM.md §2) of each pixel's
-    candidates in ``bands`` (default: all ``n_disp`` of them, B = ``n_disp``)."""
+    candidates in ``bands`` (default: all ``n_disp`` of them, B = ``n_disp``), the colour
+    term weighted by ``colour_weight`` besides ``cost.ad_weight``."""
     if bands is None:
         bands = Bands.full(census_l.shape, n_disp)
     out = volumes.volume("cost", census_l.shape + (bands.width,))
     matching_cost_volume(*cost_terms(colour_l, colour_r, census_l, census_r, grad_l, grad_r,
-                                     cfg, planar=True), bands.lo, bands.count, out)
+                                     cfg, planar=True, colour_weight=colour_weight),
+                         bands.lo, bands.count, out)
     return out

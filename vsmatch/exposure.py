@@ -16,15 +16,16 @@ from .level import matching_costs
 
 
 def correct_exposure(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
-                      ) -> tuple[np.ndarray, Config, photometric.Correction | None]:
-    """The right view mapped onto the left's colours and the config with the colour
-    term's weight, learnt from a first match on small views (``vsmatch.photometric``)."""
+                      ) -> tuple[np.ndarray, photometric.Correction | None, float]:
+    """The right view mapped onto the left's colours, the map, and the weight the colour
+    term keeps (1: fully trusted), learnt from a first match on small views
+    (``vsmatch.photometric``)."""
     small_l, small_r, small_max = left, right, max_disp
     while True:  # at least one level down: only the statistics of the matches are used
         width, small_max = pyramid.level_down(small_l.shape[1], small_max)
         if width < 2 * cfg.cost.census_width or small_max < 1 or min(
                 small_l.shape[:2]) < 2 * cfg.cost.census_height:
-            return right, cfg, None
+            return right, None, 1.0
         small_l, small_r = downsample(small_l), downsample(small_r)
         if width <= cfg.photometric.max_width:
             break
@@ -32,11 +33,9 @@ def correct_exposure(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Co
     correction = photometric.learn(small_l, small_r, first_disp, matched,
                                    cfg.photometric.field_sigma)
     if correction is None:
-        return right, cfg, None
+        return right, None, 1.0
     weight = photometric.colour_weight(correction.excess, cfg.photometric)
-    cfg = dataclasses.replace(cfg, cost=dataclasses.replace(
-        cfg.cost, ad_weight=cfg.cost.ad_weight * weight))
-    return photometric.apply(right, correction), cfg, correction
+    return photometric.apply(right, correction), correction, weight
 
 
 #: Channels ``cv2.blur`` filters at once: OpenCV 5 takes at most 128 (4.x took 512); each

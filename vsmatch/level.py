@@ -18,12 +18,12 @@ from .bands import Bands
 from .config import Config, CostConfig
 from .disparity import INVALID_DISPARITY
 from .images import to_grey
-from .result import MatchResult, timed
+from .result import Learnt, MatchResult, learn, timed
 
 
 def matching_costs(left: np.ndarray, right: np.ndarray, n_disp: int, cost_cfg: CostConfig,
-                    direction: bool = True, bands: Bands | None = None
-                    ) -> tuple[np.ndarray, tuple, tuple]:
+                    direction: bool = True, bands: Bands | None = None,
+                    colour_weight: float = 1.0) -> tuple[np.ndarray, tuple, tuple]:
     """The cost volume (ALGORITHM.md §1-2) and each view's gradient magnitude and
     direction (None unless ``direction``), which the arms need too."""
     grey_l, grey_r = to_grey(left), to_grey(right)
@@ -31,22 +31,27 @@ def matching_costs(left: np.ndarray, right: np.ndarray, n_disp: int, cost_cfg: C
     sens_r = sensitivity.visual_sensitivity(grey_r, direction)
     volume = cost.cost_volume(left, right, cost.census_for(grey_l, cost_cfg),
                               cost.census_for(grey_r, cost_cfg), sens_l[0], sens_r[0],
-                              n_disp=n_disp, cfg=cost_cfg, bands=bands)
+                              n_disp=n_disp, cfg=cost_cfg, bands=bands,
+                              colour_weight=colour_weight)
     return volume, sens_l, sens_r
 
 
-def solve(left: np.ndarray, right: np.ndarray, max_disp: int,
-                 cfg: Config, bands: Bands | None = None) -> MatchResult:
+def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
+          bands: Bands | None = None, learnt: Learnt | None = None) -> MatchResult:
     """One level's solver: the stages in order (ALGORITHM.md §1-5), every pixel searching
-    its band of ``0 .. max_disp`` (default: the whole range, the full search)."""
+    its band of ``0 .. max_disp`` (default: the whole range, the full search). ``learnt``:
+    what the pipeline learnt of the pair (its noise, the colour weight); default: the
+    noise of these views."""
     n_disp = int(max_disp) + 1
     seconds: dict[str, float] = {}
     stage = functools.partial(timed, seconds)
 
-    noise_sigma = None
-    if cfg.noise.adapt:
+    if learnt is None:
         with stage("noise"):
-            cfg, noise_sigma = noise.adapt_to_pair(cfg, left, right)
+            learnt = learn(left, right, cfg)
+    noise_sigma = learnt.noise_at(left.shape[1])
+    if noise_sigma is not None:
+        cfg = noise.adapt_to_noise(cfg, noise_sigma)
     if cfg.cost.presmooth_sigma > 0:
         with stage("presmooth"):
             left = sensitivity.presmooth(left, cfg.cost.presmooth_sigma)
@@ -54,7 +59,8 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int,
 
     with stage("cost"):
         volume, (grad_l, theta_l), (grad_r, theta_r) = matching_costs(
-            left, right, n_disp, cfg.cost, direction=cfg.arms.kappa != 0, bands=bands)
+            left, right, n_disp, cfg.cost, direction=cfg.arms.kappa != 0, bands=bands,
+            colour_weight=learnt.colour_weight)
 
     arms_cfg = cfg.arms
     scanline = cfg.scanline.enabled
@@ -142,4 +148,4 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int,
             result = refinement.median3(result)
 
     return MatchResult(disparity=result, labels=labels, seconds=seconds, config=cfg,
-                       noise_sigma=noise_sigma, curve=curve)
+                       noise_sigma=noise_sigma, colour_weight=learnt.colour_weight, curve=curve)

@@ -60,11 +60,15 @@ def smoothed_noise_factor(sigma: float) -> float:
     return float(np.sum(weights ** 2))
 
 
-def adapt_to_pair(cfg: Config, left: np.ndarray, right: np.ndarray) -> tuple[Config, float]:
-    """``cfg`` adapted (:func:`adapt_to_noise`) to the noise estimated on a pair, the mean
-    of its two views' estimates; and that estimate."""
-    sigma = 0.5 * (estimate_noise(left) + estimate_noise(right))
-    return adapt_to_noise(cfg, sigma), sigma
+#: How one pyramid level down (``cv2.pyrDown``: the 5 x 5 Gaussian of weights 1 4 6 4 1
+#: over 16 a row and a column, every other pixel kept) scales white noise's deviation:
+#: the root of the sum of the squared 2-D weights, (1 + 16 + 36 + 16 + 1) / 256.
+LEVEL_NOISE_FACTOR = 70 / 256
+
+
+def estimate_pair_noise(left: np.ndarray, right: np.ndarray) -> float:
+    """The noise of a pair: the mean of its two views' estimates."""
+    return 0.5 * (estimate_noise(left) + estimate_noise(right))
 
 
 def adapt_to_noise(cfg: Config, sigma: float) -> Config:

@@ -15,7 +15,7 @@ from . import temporal as video
 from .checks import check_pair, check_views  # noqa: F401  (the inputs' checks, re-exported)
 from .config import Config, load_config
 from .level import solve
-from .result import MatchResult, timed
+from .result import Learnt, MatchResult, learn, timed
 from .temporal import Memory, Temporal
 
 
@@ -54,7 +54,7 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Conf
             return result
         temporal.reason = "confidence collapsed"
     result = _search_whole_range(left, right, max_disp, cfg)
-    temporal.memory = video.remember(result, grey, max_disp)
+    temporal.memory = video.remember(result, grey, max_disp, config=cfg)
     return result
 
 
@@ -62,19 +62,21 @@ def _search_whole_range(left: np.ndarray, right: np.ndarray, max_disp: int,
                         cfg: Config) -> MatchResult:
     """Disparities ``0 .. max_disp``, every one a candidate at every pixel."""
     seconds: dict[str, float] = {}
-    correction = None
+    correction, weight = None, 1.0
     # 1. The right view's colours mapped onto the left's; how far the colour term holds.
     if cfg.photometric.enabled:
         with timed(seconds, "photometric"):
-            right, cfg, correction = exposure.correct_exposure(left, right, max_disp, cfg)
-    # 2. Costs, aggregation, scanline, winners, checks and refinement (vsmatch.level), on
+            right, correction, weight = exposure.correct_exposure(left, right, max_disp, cfg)
+    # 2. The views' noise, which every level's thresholds adapt to.
+    learnt = _learn(left, right, cfg, weight, seconds)
+    # 3. Costs, aggregation, scanline, winners, checks and refinement (vsmatch.level), on
     #    the whole range where a row fits, else a level down and in bands above it.
     levels = pyramid.coarse_levels(left.shape[1], max_disp + 1, cfg.pyramid.max_row_cells,
                                    cfg.pyramid.min_levels, left.shape[0], cfg.pyramid.max_cells)
-    result = scale.coarse_to_fine(solve, left, right, max_disp, cfg, levels)
+    result = scale.coarse_to_fine(functools.partial(solve, learnt=learnt), left, right,
+                                  max_disp, cfg, levels)
     result.seconds = {**seconds, **result.seconds}
     result.photometric = correction
-    result.exposed = cfg
     _fit_planes(result, left, max_disp)
     return _with_confidence(result, left, max_disp)
 
@@ -90,20 +92,31 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int, memory
     if memory.correction is not None:
         with timed(seconds, "photometric"):
             right = photometric.apply(right, memory.correction)
+    learnt = _learn(left, right, cfg, memory.colour_weight, seconds)
     with timed(seconds, "bands"):
         bands = video.bands_from_previous(memory, moved, cfg.temporal)
-    result = scale.in_stripes(solve, left, right, max_disp, cfg, bands)
+    result = scale.in_stripes(functools.partial(solve, learnt=learnt), left, right, max_disp,
+                              cfg, bands)
     result.seconds = {**seconds, **result.seconds}
-    result.photometric, result.exposed = memory.correction, cfg
+    result.photometric = memory.correction
     result.curve = memory.curve  # the last full search's (a band's curve is short)
     _fit_planes(result, left, max_disp)
     result.disparity = video.hold(memory.disparity, result.disparity, moved, cfg.temporal)
     return _with_confidence(result, left, max_disp)
 
 
+def _learn(left: np.ndarray, right: np.ndarray, cfg: Config, colour_weight: float,
+           seconds: dict[str, float]) -> Learnt:
+    """What every level's solver is given of the pair (its noise measured once, here)."""
+    if not cfg.noise.adapt:
+        return learn(left, right, cfg, colour_weight)
+    with timed(seconds, "noise"):
+        return learn(left, right, cfg, colour_weight)
+
+
 def _fit_planes(result: MatchResult, left: np.ndarray, max_disp: int) -> None:
     """Slanted planes (when on) and the range's limits, into ``result``."""
-    # 3. Slanted planes over depth-aware regions.
+    # 4. Slanted planes over depth-aware regions.
     adapted = result.config  # with the noise adaptation's changes
     if adapted.planes.enabled and result.labels is not None:
         with timed(result.seconds, "planes"):
@@ -117,7 +130,7 @@ def _fit_planes(result: MatchResult, left: np.ndarray, max_disp: int) -> None:
 
 def _with_confidence(result: MatchResult, left: np.ndarray, max_disp: int) -> MatchResult:
     """``result`` with how likely each disparity is right."""
-    # 4. How likely each disparity is right.
+    # 5. How likely each disparity is right.
     with timed(result.seconds, "confidence"):
         result.confidence = confidence.confidence_map(result.disparity, result.labels, left,
                                                       result.curve, max_disp + 1)

@@ -5,13 +5,12 @@ in, as scikit-image's ``coarse_to_fine`` takes its solver.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable
 
 import numpy as np
 
-from . import confidence, disparity, noise, pyramid
+from . import confidence, disparity, pyramid
 from .bands import Bands
 from .config import Config
 from .disparity import INVALID_DISPARITY
@@ -19,7 +18,8 @@ from .images import downsample, upsample_nearest
 from .result import MatchResult, timed
 from .tiles import stripe_layout
 
-#: One level's solver: (left, right, max_disp, config, bands or None) -> MatchResult.
+#: One level's solver: (left, right, max_disp, config, bands or None) -> MatchResult; the
+#: same for every level and stripe of a pair (what it learnt of the pair is bound in).
 Solver = Callable[[np.ndarray, np.ndarray, int, Config, "Bands | None"], MatchResult]
 #: The method over ``0 .. max_disp``: (left, right, max_disp) -> MatchResult.
 FromZero = Callable[[np.ndarray, np.ndarray, int], MatchResult]
@@ -120,8 +120,9 @@ def coarse_to_fine(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp:
     # (the confidence is calibrated on whole-range curves).
     curve = {k: upsample_nearest(v, left.shape[:2]) for k, v in coarse.curve.items()}
     return MatchResult(disparity=result.disparity, labels=result.labels, seconds=seconds,
-                       config=coarse.config, noise_sigma=coarse.noise_sigma,
-                       levels=coarse.levels + 1, stripes=coarse.stripes, curve=curve)
+                       config=result.config, noise_sigma=result.noise_sigma,
+                       colour_weight=result.colour_weight, levels=coarse.levels + 1,
+                       stripes=coarse.stripes, curve=curve)
 
 
 #: Bytes per pixel of the full search besides its two float32 cost volumes (census, arms,
@@ -155,10 +156,6 @@ def in_stripes(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp: int
     layout = stripe_layout(height, stripe_rows(width, depth, cfg), cfg.memory.overlap)
     if len(layout) == 1:
         return solve(left, right, max_disp, cfg, bands)
-    noise_sigma = None
-    if cfg.noise.adapt:  # once for the whole pair, as in one piece
-        cfg, noise_sigma = noise.adapt_to_pair(cfg, left, right)
-        cfg = dataclasses.replace(cfg, noise=dataclasses.replace(cfg.noise, adapt=False))
     disp = np.empty((height, width), dtype=np.float32)
     labels = None
     curve = None
@@ -179,5 +176,6 @@ def in_stripes(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp: int
             curve[name][core_first:core_stop] = values[core]
         for name, value in part.seconds.items():
             seconds[name] = seconds.get(name, 0.0) + value
-    return MatchResult(disparity=disp, labels=labels, seconds=seconds, config=cfg,
-                       noise_sigma=noise_sigma, stripes=len(layout), curve=curve)
+    return MatchResult(disparity=disp, labels=labels, seconds=seconds, config=part.config,
+                       noise_sigma=part.noise_sigma, colour_weight=part.colour_weight,
+                       stripes=len(layout), curve=curve)

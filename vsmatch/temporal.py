@@ -37,8 +37,9 @@ class Memory:
     confidence: np.ndarray
     grey: np.ndarray  # the left view, float32
     curve: dict[str, np.ndarray]  # the cost-curve features of the last full search
-    config: Config  # the config as used after the exposure correction
+    config: Config  # the config of the stream
     correction: object  # photometric.Correction or None
+    colour_weight: float  # the colour term's weight after the exposure correction
     full_confidence: float  # the mean confidence of the last full search
     since_full: int = 0
 
@@ -194,15 +195,16 @@ def hold(previous: np.ndarray, new: np.ndarray, moved: np.ndarray,
     return out
 
 
-def remember(result, grey: np.ndarray, max_disp: int, memory: Memory | None = None
-             ) -> Memory:
+def remember(result, grey: np.ndarray, max_disp: int, memory: Memory | None = None,
+             config: Config | None = None) -> Memory:
     """The memory a frame's result (``MatchResult``, matched from 0) leaves the next frame:
-    a full search's anew (``memory`` None), a band search's added to the last."""
+    a full search's anew (``memory`` None; ``config`` the stream's), a band search's added
+    to the last."""
     if memory is None:
         curve = {name: values.copy() for name, values in result.curve.items()}
         return Memory(grey.shape, int(max_disp), result.disparity.copy(),
-                      result.confidence.copy(), grey, curve, result.exposed,
-                      result.photometric, float(result.confidence.mean()))
+                      result.confidence.copy(), grey, curve, config, result.photometric,
+                      result.colour_weight, float(result.confidence.mean()))
     return Memory(memory.shape, memory.max_disp, result.disparity.copy(),
                   result.confidence.copy(), grey, memory.curve, memory.config, memory.correction,
-                  memory.full_confidence, memory.since_full + 1)
+                  memory.colour_weight, memory.full_confidence, memory.since_full + 1)

@@ -288,7 +288,7 @@ def _report_run(ctx: click.Context, result: pipeline.MatchResult) -> None:
         verbose(ctx, f"exposure: matched colours differ by {fit.before:.1f} grey levels, "
                       f"{fit.residual:.1f} after the right view's colour map "
                       f"({fit.matches} pixels); colour term weight "
-                      f"{result.config.cost.ad_weight:.2f}")
+                      f"{result.colour_weight:.2f}")
     if result.levels or result.stripes > 1:
         verbose(ctx, f"full search {result.levels} pyramid level(s) down, in "
                       f"{result.stripes} stripe(s)")
