@@ -44,7 +44,7 @@ def test_demo_on_a_full_disk_leaves_no_folder(small_disk):
 
 
 def test_rectify_on_a_full_disk_leaves_no_folder(small_disk, tmp_path):
-    from test_never_silent_2 import write_opencv_rig, write_pair
+    from cli_helpers import write_opencv_rig, write_pair
 
     left, right = write_pair(tmp_path, np.random.default_rng(0))
     calib = write_opencv_rig(tmp_path / "rig.yaml")

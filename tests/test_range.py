@@ -150,7 +150,7 @@ def searched(result):
 
 def test_the_found_range_stops_where_the_calibration_puts_infinity(tmp_path, rng):
     """A point at infinity has d = -doffs: the found range does not reach below it."""
-    from test_never_silent import verged_pair
+    from cli_helpers import verged_pair
 
     views = write_views(tmp_path, *verged_pair(rng))
     free = searched(CliRunner().invoke(main, ["-v", "run", *map(str, views), "-o",
@@ -170,8 +170,8 @@ def test_the_found_range_stops_where_the_calibration_puts_infinity(tmp_path, rng
 def test_a_verged_rigs_rectified_folder_keeps_its_range(tmp_path, rng):
     """run --rectified writes the searched range's bottom (dmin) beside ndisp: run again
     on the folder, the same negative range is searched (it was cut to 0..max)."""
-    from test_never_silent import shifted_pair
-    from test_never_silent_2 import write_opencv_rig
+    from cli_helpers import shifted_pair
+    from cli_helpers import write_opencv_rig
 
     top, bottom = (shifted_pair(rng, dx, height=48, width=160) for dx in (-12, 10))
     left, right = np.vstack([top[0], bottom[0]]), np.vstack([top[1], bottom[1]])

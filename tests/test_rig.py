@@ -328,7 +328,7 @@ def test_a_calib_txt_with_a_byte_order_mark_is_read(tmp_path):
 
 
 def test_rectify_names_the_files_it_wrote(tmp_path):
-    from test_never_silent_2 import write_opencv_rig, write_pair
+    from cli_helpers import write_opencv_rig, write_pair
 
     left, right = write_pair(tmp_path, np.random.default_rng(0))
     calib = write_opencv_rig(tmp_path / "rig.yaml")
@@ -342,8 +342,8 @@ def test_a_raw_pair_whose_rows_disagree_after_rectifying_is_not_told_to_rectify(
     """vsmatch rectified the views itself: "rectify it first" would be wrong advice."""
     import vsmatch
     from vsmatch import search_range
-    from test_never_silent import shifted_pair
-    from test_never_silent_2 import write_opencv_rig
+    from cli_helpers import shifted_pair
+    from cli_helpers import write_opencv_rig
 
     left, right = shifted_pair(np.random.default_rng(1), 8, dy=6, height=96, width=160)
     stereo = vsmatch.StereoMatcher(calib=str(write_opencv_rig(tmp_path / "rig.yaml")))

@@ -1,0 +1,163 @@
+"""Raw-rig calibrations (OpenCV, ROS, Kalibr, calib.txt): impossible rigs refused naming
+the key."""
+
+import numpy as np
+import pytest
+import yaml
+from cli_helpers import (
+    HEIGHT,
+    WIDTH,
+    invoke,
+    kalibr_rig,
+    one_line_error,
+    ros_pair,
+    write_opencv_rig,
+    write_pair,
+)
+
+from vsmatch import rig
+from vsmatch.geometry import CalibrationError
+
+
+def opencv_text(**replace):
+    """An OpenCV YAML rig as text, with keys' values replaced verbatim."""
+    lines = {"K1": "!!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [300., 0., 80., "
+                   "0., 300., 48., 0., 0., 1.]",
+             "K2": "!!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [300., 0., 80., "
+                   "0., 300., 48., 0., 0., 1.]",
+             "D1": "!!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n"
+                   "   data: [0., 0., 0., 0., 0.]",
+             "D2": "!!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n"
+                   "   data: [0., 0., 0., 0., 0.]",
+             "R": "!!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [1., 0., 0., "
+                  "0., 1., 0., 0., 0., 1.]",
+             "T": "!!opencv-matrix\n   rows: 3\n   cols: 1\n   dt: d\n   data: [-60., 0., 0.]",
+             "image_width": str(WIDTH), "image_height": str(HEIGHT)}
+    lines.update(replace)
+    return "%YAML:1.0\n---\n" + "".join(f"{k}: {v}\n" for k, v in lines.items() if v is not None)
+
+
+def coefficients(n):
+    return (f"!!opencv-matrix\n   rows: 1\n   cols: {n}\n   dt: d\n   data: "
+            f"[{', '.join(['0.'] * n)}]")
+
+
+@pytest.mark.parametrize("changes,key", [
+    (dict(R=np.zeros((3, 3))), "R is not a rotation"),
+    (dict(R=np.diag([1.0, 1, -1])), "R is not a rotation"),
+    (dict(T=np.array([[-1e300], [0], [0]])), "overflow float32"),
+    (dict(T=np.array([[0.0], [-60], [0]])), "not mostly along x"),
+    (dict(K2=np.zeros((3, 3))), "K2 has focal lengths"),
+    (dict(K1=np.array([[300.0, 0, 900], [0, 300, 48], [0, 0, 1]])), "outside the"),
+])
+def test_impossible_opencv_rigs_are_refused_naming_the_key(tmp_path, rng, changes, key):
+    views = write_pair(tmp_path, rng)
+    calib = write_opencv_rig(tmp_path / "rig.yaml", **changes)
+    line = one_line_error(invoke("run", *views, "--calib", calib, "-o", tmp_path / "d.pfm",
+                                 "--max-disp", 16))
+    assert key in line and "rig.yaml" in line
+    assert not (tmp_path / "d.pfm").exists()
+
+
+@pytest.mark.parametrize("side,changes,key", [
+    ("right", {"rectification_matrix": {"data": [0.0] * 9}}, "rectification_matrix"),
+    ("right", {"camera_matrix": {"data": [0.0] * 9}}, "camera_matrix"),
+    ("right", {"projection_matrix": {"data": [0.0] * 12}}, "projection_matrix"),
+    ("right", {"image_width": -5}, "image_width"),
+    ("left", {"image_width": float("inf")}, "image_width"),
+    ("left", {"image_width": float("nan")}, "image_width"),
+    ("left", {"image_width": "abc"}, "image_width"),
+])
+def test_impossible_ros_pairs_are_refused_naming_the_key(tmp_path, side, changes, key):
+    left, right = ros_pair(tmp_path, **{f"{side}_changes": changes})
+    with pytest.raises(CalibrationError) as caught:
+        rig.read_rig([left, right])
+    assert key in str(caught.value) and f"{side}.yaml" in str(caught.value)
+
+
+def test_hand_values_with_a_raw_rig_are_refused(tmp_path, rng):
+    views = write_pair(tmp_path, rng)
+    calib = write_opencv_rig(tmp_path / "rig.yaml")
+    line = one_line_error(invoke("run", *views, "--calib", calib, "--focal", 500,
+                                 "--baseline", 1, "-o", tmp_path / "d.pfm"), code=2)
+    assert "--calib or --focal, --baseline" in line
+
+
+@pytest.mark.parametrize("command", ["run", "rectify"])
+def test_alpha_nan_is_refused(tmp_path, rng, command):
+    views = write_pair(tmp_path, rng)
+    calib = write_opencv_rig(tmp_path / "rig.yaml")
+    out = ["-o", tmp_path / "d.pfm"] if command == "run" else ["--to", tmp_path / "r"]
+    line = one_line_error(invoke(command, *views, "--calib", calib, "--alpha", "nan", *out),
+                          code=2)
+    assert "--alpha" in line and "finite" in line
+
+
+@pytest.mark.parametrize("changes,message", [
+    ({"distortion_model": "equidistant"}, "cam1's distortion_model"),
+    ({"resolution": [WIDTH + 2, HEIGHT]}, "cam1's resolution"),
+    ({"resolution": [WIDTH, HEIGHT, 3]}, "[width, height]"),
+])
+def test_kalibr_cam1_fields_are_read(tmp_path, changes, message):
+    (tmp_path / "camchain.yaml").write_text(yaml.safe_dump(kalibr_rig(**changes)))
+    with pytest.raises(CalibrationError) as caught:
+        rig.read_rig([tmp_path / "camchain.yaml"])
+    assert message in str(caught.value)
+
+
+def test_a_calib_txt_for_other_views_is_refused(tmp_path, rng):
+    views = write_pair(tmp_path, rng)
+    (tmp_path / "calib.txt").write_text(
+        "cam0=[300 0 80; 0 300 48; 0 0 1]\ncam1=[300 0 80; 0 300 48; 0 0 1]\ndoffs=0\n"
+        f"baseline=60\nwidth={WIDTH * 2}\nheight={HEIGHT}\nndisp=17\n")
+    line = one_line_error(invoke("run", *views, "--calib", tmp_path / "calib.txt", "-o",
+                                 tmp_path / "d.pfm"))
+    assert "calib.txt" in line and f"{WIDTH * 2}x{HEIGHT}" in line
+    assert not (tmp_path / "d.pfm").exists()
+
+
+@pytest.mark.parametrize("replace,key", [
+    (dict(T="!!opencv-matrix\n   rows: 3\n   cols: 1\n   dt: d\n   data: [0., 0., 0.]"), "T"),
+    (dict(D1=coefficients(3)), "D1"),
+    (dict(D1=coefficients(10)), "D1"),
+    (dict(D1=coefficients(100)), "D1"),
+    (dict(K1='"hello"'), "K1"),
+    (dict(image_width=None, image_height=None, imageSize="hello"), "imageSize"),
+    (dict(D1="[]"), "D1"),
+    (dict(image_width=".inf"), "image_width"),
+    (dict(image_width=".nan"), "image_width"),
+    (dict(image_width="'abc'"), "image_width"),
+    (dict(image_width="1e400"), "image_width"),
+    (dict(K1="!!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [300., 0., 80., "
+              "0., 0., 48., 0., 0., 1.]"), "K1"),
+])
+def test_bad_opencv_fields_are_one_line_naming_the_key(tmp_path, rng, replace, key):
+    views = write_pair(tmp_path, rng)
+    (tmp_path / "rig.yaml").write_text(opencv_text(**replace))
+    line = one_line_error(invoke("run", *views, "--calib", tmp_path / "rig.yaml", "-o",
+                                 tmp_path / "d.pfm", "--max-disp", 16))
+    assert "rig.yaml" in line and key in line
+    assert "function" not in line and "swapped" not in line and "convert" not in line
+
+
+@pytest.mark.parametrize("text", [
+    opencv_text()[:120],
+    '<?xml version="1.0"?>\n<!DOCTYPE x [<!ENTITY a "b">]>\n<opencv_storage><K1>',
+    "%YAML:1.0\n---\nK1: [1, 2\n",
+])
+def test_broken_filestorage_files_are_one_line(tmp_path, rng, text):
+    views = write_pair(tmp_path, rng)
+    (tmp_path / "rig.yaml").write_text(text)
+    line = one_line_error(invoke("run", *views, "--calib", tmp_path / "rig.yaml", "-o",
+                                 tmp_path / "d.pfm", "--max-disp", 16))
+    assert "rig.yaml" in line and "SystemError" not in line
+
+
+@pytest.mark.parametrize("coeffs", [[], [0.1, 0.2]])
+def test_a_fisheye_without_four_coefficients_is_named(tmp_path, coeffs):
+    data = kalibr_rig()
+    for cam in ("cam0", "cam1"):
+        data[cam].update(distortion_model="equidistant", distortion_coeffs=coeffs)
+    (tmp_path / "camchain.yaml").write_text(yaml.safe_dump(data))
+    with pytest.raises(CalibrationError, match="cam0.distortion_coeffs has"):
+        rig.read_rig([tmp_path / "camchain.yaml"])
