@@ -242,8 +242,8 @@ def test_band_levels_in_stripes_stay_near_one_piece(teddy):
     coarse = pipeline.run(images.downsample(s.left), images.downsample(s.right),
                           max_disp=coarse_max, config=cfg)
     bands = pyramid.bands_from_coarse(coarse.disparity, coarse.labels, s.left.shape[:2],
-                                      s.max_disp, cfg.pyramid)
-    assert 0 < bands.count.mean() < 8 and bands.width <= cfg.pyramid.max_band
+                                      s.max_disp, cfg.bands)
+    assert 0 < bands.count.mean() < 8 and bands.width <= cfg.bands.max_band
     whole = scale.in_stripes(level.solve, s.left, s.right, s.max_disp, cfg, bands)
     small = config_from_dict({"memory": {"max_mb": 16, "overlap": 24}}, base=cfg)
     cut = scale.in_stripes(level.solve, s.left, s.right, s.max_disp, small, bands)

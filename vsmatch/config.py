@@ -48,12 +48,6 @@ class CostConfig:
         "Scale of the colour (absolute difference) term; null switches it off."))
     ad_weight: float = _param(1.0, 0.0, 1.0, doc=(
         "Weight of the colour term (the photometric stage lowers it where colours disagree)."))
-    # The colour term compares colours less their mean over a box this many pixels wide
-    # (odd); 0 compares them as they are. Real cameras differ in vignetting and colour
-    # response, which a plain difference takes for evidence on textureless surfaces.
-    ad_mean_box: int = _param(0, 0, 255, doc=(
-        "Compare colours less their mean over a box this wide (odd); 0 compares them as they "
-        "are."))
     presmooth_sigma: float = _param(0.0, 0.0, 5.0, doc=(
         "Gaussian blur of both views before every stage; 0 is off."))
 
@@ -228,19 +222,12 @@ class PlanesConfig:
 
 
 @dataclass(frozen=True)
-class PyramidConfig:
-    """Coarse-to-fine search (``vsmatch.pyramid``): halve the views while a row holds more
-    than ``max_row_cells`` width x disparity cells, or the pair more than ``max_cells``
-    width x height x disparity cells (0: no such limit); at each finer level the method
-    runs over bands: the coarse estimate's 3 x 3 range widened by ``band`` (at most
-    ``max_band`` candidates), with arms of at most ``support`` pixels and, with
-    ``scanline``, the scanline optimisation (the ``scanline`` section's values)."""
+class BandsConfig:
+    """The band search above the coarsest level (``vsmatch.pyramid``): each pixel searches
+    the coarse estimate's 3 x 3 range widened by ``band`` (at most ``max_band``
+    candidates), with arms of at most ``support`` pixels and, with ``scanline``, the
+    scanline optimisation (the ``scanline`` section's values)."""
 
-    max_row_cells: int = _param(262144, 1024, 1 << 40, doc=(
-        "Halve the views while a row holds more width × disparity cells."))
-    max_cells: int = _param(0, 0, 1 << 50, doc=(
-        "Halve at least once above this many width × height × disparity cells (0: no "
-        "limit)."))
     scanline: bool = _param(False, doc=(
         "Scanline optimisation at the finer levels (when the scanline stage is on)."))
     band: int = _param(0, 0, 64, doc="Pixels added on each side of a band.")
@@ -248,6 +235,20 @@ class PyramidConfig:
     max_band: int = _param(8, 3, 4096, doc=(
         "Most candidates a pixel keeps at a finer level; a wider 3 × 3 range is cut to "
         "this many around the pixel's own estimate."))
+
+
+@dataclass(frozen=True)
+class PyramidConfig:
+    """When to search coarse-to-fine (``vsmatch.pyramid``; scheduling): halve the views
+    while a row holds more than ``max_row_cells`` width x disparity cells, or the pair more
+    than ``max_cells`` width x height x disparity cells (0: no such limit); the finer
+    levels search bands (the ``bands`` section)."""
+
+    max_row_cells: int = _param(262144, 1024, 1 << 40, doc=(
+        "Halve the views while a row holds more width × disparity cells."))
+    max_cells: int = _param(0, 0, 1 << 50, doc=(
+        "Halve at least once above this many width × height × disparity cells (0: no "
+        "limit)."))
     # Halve at least this many times, whatever the row (while 64 columns and 16
     # disparities remain): the ``fast`` config's coarse-to-fine at every size.
     min_levels: int = _param(0, 0, 4, doc="Halve at least this often, whatever the size.")
@@ -339,15 +340,32 @@ class Config:
     subpixel: SubpixelConfig = field(default_factory=SubpixelConfig)
     planes: PlanesConfig = field(default_factory=PlanesConfig)
     photometric: PhotometricConfig = field(default_factory=PhotometricConfig)
+    bands: BandsConfig = field(default_factory=BandsConfig)
+    temporal: TemporalConfig = field(default_factory=TemporalConfig)
+    # Scheduling, not the method: how the work is laid out (levels, stripes). In a file
+    # these sit under ``schedule:``.
     pyramid: PyramidConfig = field(default_factory=PyramidConfig)
     memory: MemoryConfig = field(default_factory=MemoryConfig)
-    temporal: TemporalConfig = field(default_factory=TemporalConfig)
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
+        """Every section's values, by section name."""
         return dataclasses.asdict(self)
+
+    def to_file_dict(self) -> dict[str, Any]:
+        """The values as a config file holds them: the method's sections, then
+        ``schedule`` with the scheduling ones."""
+        values = self.to_dict()
+        schedule = {name: values.pop(name) for name in SCHEDULE_SECTIONS}
+        return {**values, "schedule": schedule}
 
 
 _SECTIONS = {f.name: f.default_factory for f in dataclasses.fields(Config)}
+#: The sections that lay the work out rather than define the method: under ``schedule:``
+#: in a file (at the top level, as before, still read).
+SCHEDULE_SECTIONS = ("pyramid", "memory")
+#: Keys that moved, still read where they were: the band search's options were pyramid's.
+MOVED_KEYS = {("pyramid", key): ("bands", key)
+              for key in ("scanline", "band", "support", "max_band")}
 
 
 #: A config file larger than this is refused unread: the bundled ones are under 4 kB, and
@@ -441,6 +459,7 @@ def config_from_dict(data: dict[str, Any] | None, base: Config | None = None) ->
         data = {}
     if not isinstance(data, dict):
         raise ConfigError("config must be a mapping of sections (cost, arms, ...)")
+    data = _moved_keys_read(_schedule_lifted(data))
     sections = {}
     for name, value in data.items():
         if name not in _SECTIONS:
@@ -463,6 +482,45 @@ def config_from_dict(data: dict[str, Any] | None, base: Config | None = None) ->
     cfg = dataclasses.replace(base, **sections)
     _check_cross_constraints(cfg)
     return cfg
+
+
+def _schedule_lifted(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` with the sections under ``schedule`` at the top level beside the rest."""
+    if "schedule" not in data:
+        return data
+    data = dict(data)
+    schedule = data.pop("schedule")
+    if schedule is None:
+        return data
+    if not isinstance(schedule, dict):
+        raise ConfigError("config section 'schedule' must be a mapping")
+    for name, value in schedule.items():
+        if name not in SCHEDULE_SECTIONS:
+            raise ConfigError(f"unknown config key {quote(f'schedule.{name}')} (allowed: "
+                              f"{', '.join(SCHEDULE_SECTIONS)})")
+        if name in data:
+            raise ConfigError(f"config section '{name}' is given twice: at the top and under "
+                              "schedule")
+        data[name] = value
+    return data
+
+
+def _moved_keys_read(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` with keys that moved (:data:`MOVED_KEYS`) taken to their new sections."""
+    data = dict(data)
+    for (old_section, key), (section, new_key) in MOVED_KEYS.items():
+        values = data.get(old_section)
+        if not isinstance(values, dict) or key not in values:
+            continue
+        target = data.get(section) or {}
+        if not isinstance(target, dict):
+            continue  # refused below as any section that is not a mapping
+        if new_key in target:
+            raise ConfigError(f"config value {old_section}.{key} is given twice: also as "
+                              f"{section}.{new_key}")
+        data[old_section] = {k: v for k, v in values.items() if k != key}
+        data[section] = {**target, new_key: values[key]}
+    return data
 
 
 def bundled_config_names() -> list[str]:

@@ -59,20 +59,6 @@ def max_cost(cfg: CostConfig, colour_weight: float = 1.0) -> float:
 GRADIENT_STEPS = 4
 
 
-def zero_mean_colour(colour: np.ndarray, box: int) -> np.ndarray:
-    """(H, W, C) int16 colours for the colour term: as they are, or with ``box`` > 0 less
-    their mean over a ``box`` x ``box`` window, offset by 128 and clipped to 0..255 (a
-    local difference of more than 127 grey levels is as different as it gets)."""
-    colour = as_channels(colour)
-    if box <= 0:
-        return colour.astype(np.int16)
-    values = colour.astype(np.float32)
-    mean = cv2.blur(values, (box, box), borderType=cv2.BORDER_REFLECT)
-    if mean.ndim == 2:
-        mean = mean[:, :, None]
-    return np.clip(np.round(values - mean.reshape(values.shape)) + 128, 0, 255).astype(np.int16)
-
-
 def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
                census_l: np.ndarray, census_r: np.ndarray,
                grad_l: np.ndarray, grad_r: np.ndarray, cfg: CostConfig,
@@ -84,7 +70,7 @@ def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
     leaves of the colour term (times ``cost.ad_weight``)."""
     n_bits = cfg.census_width * cfg.census_height - 1
     census_table = rho(np.arange(n_bits + 1), cfg.lambda_census).astype(np.float32)
-    colour_l, colour_r = (zero_mean_colour(c, cfg.ad_mean_box) for c in (colour_l, colour_r))
+    colour_l, colour_r = (as_channels(c).astype(np.int16) for c in (colour_l, colour_r))
     channels = colour_l.shape[2]
     if planar:
         colour_l, colour_r = (np.ascontiguousarray(np.moveaxis(c, 2, 0))

@@ -182,7 +182,7 @@ def evaluate(scenes: list[Scene], methods: dict, *, dataset: str,
         if folder is not None and cfg is not None:
             folder.mkdir(parents=True, exist_ok=True)
             write_text_atomic(folder / "config.yaml",
-                              yaml.safe_dump(cfg.to_dict(), sort_keys=False))
+                              yaml.safe_dump(cfg.to_file_dict(), sort_keys=False))
         report["methods"][name] = {"scenes": per_scene, "avg": average(per_scene)}
         measured = [s["confidence"] for s in per_scene.values() if "confidence" in s]
         if measured:

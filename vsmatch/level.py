@@ -65,8 +65,8 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
     arms_cfg = cfg.arms
     scanline = cfg.scanline.enabled
     if bands is not None and not bands.is_full:  # the finer levels' options
-        scanline = scanline and cfg.pyramid.scanline
-        support = cfg.pyramid.support
+        scanline = scanline and cfg.bands.scanline
+        support = cfg.bands.support
         arms_cfg = dataclasses.replace(arms_cfg, l1=min(arms_cfg.l1, support),
                                        l2=min(arms_cfg.l2, support))
     arms_l = arms_r = None

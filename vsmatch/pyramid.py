@@ -5,9 +5,9 @@ more than ``pyramid.max_row_cells`` width x disparity cells, the views are halve
 (``cv2.pyrDown``) until it does not; the whole method runs there, and each finer level
 searches only the disparities around the upsampled coarser estimate: from twice the
 smallest to twice the largest coarse disparity of the 3 x 3 coarse neighbourhood, widened
-by ``pyramid.band`` (so both sides of a depth edge stay candidates), at most
-``pyramid.max_band`` of them. The same stages run over those bands (``vsmatch.bands``),
-with arms of at most ``pyramid.support`` pixels. Every parameter is measured in pixels of
+by ``bands.band`` (so both sides of a depth edge stay candidates), at most
+``bands.max_band`` of them. The same stages run over those bands (``vsmatch.bands``),
+with arms of at most ``bands.support`` pixels. Every parameter is measured in pixels of
 the level it runs on.
 """
 
@@ -19,7 +19,7 @@ import numpy as np
 
 from . import bands
 from .bands import Bands
-from .config import PyramidConfig
+from .config import BandsConfig
 from .disparity import VALID
 from .images import upsample_nearest
 
@@ -74,7 +74,7 @@ def coarse_extremes(coarse: np.ndarray, coarse_labels: np.ndarray | None
 
 
 def bands_from_coarse(coarse: np.ndarray, coarse_labels: np.ndarray | None,
-                      shape: tuple[int, int], max_disp: int, cfg: PyramidConfig) -> Bands:
+                      shape: tuple[int, int], max_disp: int, cfg: BandsConfig) -> Bands:
     """Each pixel's candidates at this level from the disparity one level down: twice the
     smallest to twice the largest of its coarse 3 x 3 neighbourhood (:func:`coarse_extremes`),
     widened by ``band`` and one more each side (the sub-pixel fit's neighbours), at most
