@@ -18,8 +18,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vsmatch import io  # noqa: E402
-from vsmatch.cli.video import FolderPairs  # noqa: E402
+from vsmatch import io, preview  # noqa: E402
+from vsmatch.frames import FolderPairs  # noqa: E402
 from vsmatch.matcher import StereoMatcher  # noqa: E402
 from vsmatch.peers import sgbm_matcher  # noqa: E402
 
@@ -74,7 +74,7 @@ def main() -> None:
         shown = np.linspace(0, len(frames) - 1, SHOWN).round().astype(int)
         views = [cv2.cvtColor(rectified[k][0], cv2.COLOR_GRAY2BGR)
                  if rectified[k][0].ndim == 2 else rectified[k][0] for k in shown]
-        disps = [io.colour_disparity(runs[True][1][k], high, low) for k in shown]
+        disps = [preview.colour_disparity(runs[True][1][k], high, low) for k in shown]
         picture = np.vstack([np.hstack(views), np.hstack(disps)])
         scale = min(1.0, 1600 / picture.shape[1])
         picture = cv2.resize(picture, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)

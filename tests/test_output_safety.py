@@ -146,10 +146,10 @@ def test_rectified_views_are_written_with_the_run_or_not_at_all(tmp_path, rng):
 
 
 def test_a_video_the_writer_could_not_finish_is_an_error(tmp_path, rng, monkeypatch):
-    from vsmatch.cli import video
+    from vsmatch import frames
 
     left, right = write_videos(tmp_path, rng)
-    monkeypatch.setattr(video.cv2, "VideoWriter", DroppingWriter)
+    monkeypatch.setattr(frames.cv2, "VideoWriter", DroppingWriter)
     line = one_line_error(invoke("video", left, right, "-o", tmp_path / "d.avi",
                                  "--max-disp", 16))
     assert "d.avi" in line and "holds 2 of 4 frames" in line

@@ -8,6 +8,7 @@ from click.testing import CliRunner
 import vsmatch
 from vsmatch import datasets, metrics, temporal
 from vsmatch.cli import main
+from vsmatch.images import to_grey
 from vsmatch.matcher import StereoMatcher
 
 NOISE = 2.0
@@ -116,7 +117,7 @@ def test_every_so_many_frames_the_whole_range_is_searched(adirondack, rng):
 
 @pytest.mark.parametrize("dy, dx", [(0, 0), (-1, -3), (2, 5)])
 def test_the_image_shift_is_found(adirondack, dy, dx):
-    grey = temporal.grey_of(adirondack.left)
+    grey = to_grey(adirondack.left)
     moved = np.roll(grey, (dy, dx), axis=(0, 1))
     assert temporal.image_shift(grey, moved) == (dy, dx)
 
@@ -165,6 +166,6 @@ def test_noise_alone_moves_no_memory(data_dir, rng):
     """Two noisy draws of one KITTI view: no shift (a spurious one would drift the held
     disparities a pixel a frame)."""
     scene = datasets.load_dataset("kitti2015", data_dir, names=["000000"])[0]
-    grey = temporal.grey_of(scene.left)
+    grey = to_grey(scene.left)
     draws = [grey + rng.normal(0, NOISE, grey.shape).astype(np.float32) for _ in range(4)]
     assert all(temporal.image_shift(a, b) == (0, 0) for a, b in zip(draws, draws[1:]))

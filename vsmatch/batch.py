@@ -17,7 +17,6 @@ from .executors import Executor
 from .executors.serial import SerialExecutor
 from .search_range import resolve_range
 
-IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
 
 #: File names of a pair inside a scene folder, tried in order (Middlebury v2, 2014, 2005/6).
 PAIR_NAMES = (("imL", "imR"), ("im0", "im1"), ("view1", "view5"), ("left", "right"))
@@ -177,7 +176,7 @@ def _max_disp_cell(text: str, where: str) -> int | None:
 
 
 def _image_with_stem(folder: Path, stem: str) -> Path | None:
-    for ext in IMAGE_EXTENSIONS:
+    for ext in io.IMAGE_EXTENSIONS:
         for candidate in (folder / f"{stem}{ext}", folder / f"{stem}{ext.upper()}"):
             if candidate.is_file():
                 return candidate
@@ -202,7 +201,7 @@ def find_pairs(folder: str | Path, out_dir: str | Path, *, max_disp: int | None,
                 jobs.append(PairJob(left, right, out_dir / f"{sub.name}{suffix}", max_disp))
                 break
     for path in sorted(folder.iterdir()):
-        if path.suffix.lower() not in IMAGE_EXTENSIONS:
+        if path.suffix.lower() not in io.IMAGE_EXTENSIONS:
             continue
         for left_tag, right_tag in PAIR_SUFFIXES:
             if path.stem.endswith(left_tag):
@@ -222,7 +221,7 @@ def recording_pairs(folder: Path, out_dir: Path, *, max_disp: int | None,
         left_dir, right_dir = folder / left_name, folder / right_name
         if left_dir.is_dir() and right_dir.is_dir():
             lefts, rights = (
-                {p.name: p for p in d.iterdir() if p.suffix.lower() in IMAGE_EXTENSIONS}
+                {p.name: p for p in d.iterdir() if p.suffix.lower() in io.IMAGE_EXTENSIONS}
                 for d in (left_dir, right_dir))
             jobs = [PairJob(lefts[name], rights[name],
                             out_dir / f"{lefts[name].stem}{suffix}", max_disp)

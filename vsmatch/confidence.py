@@ -34,6 +34,8 @@ import numpy as np
 from ._kernels.confidence import cost_curve, logistic
 from .bands import Bands, of
 from .disparity import VALID, MISMATCHED
+from .images import grey_levels
+from .sensitivity import sobel
 from .tiles import row_blocks
 
 #: The features, in the order of the model's weights (a constant first).
@@ -115,9 +117,8 @@ def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
     row["valid"][:] = valid
     row["mismatched"][:] = False if labels is None else labels == MISMATCHED
     log1p_into(_distance_to(valid), row["fill_distance"])
-    grey = left if left.ndim == 2 else cv2.cvtColor(left, cv2.COLOR_BGR2GRAY)
-    gradient = np.abs(cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3))
-    gradient += np.abs(cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3))
+    gx, gy = sobel(grey_levels(left))
+    gradient = np.abs(gx) + np.abs(gy)
     log1p_into(cv2.blur(gradient, (5, 5)), row["texture"])
     finite = np.where(np.isfinite(disparity), disparity, 0).astype(np.float32)
     jumps = np.zeros(shape, bool)

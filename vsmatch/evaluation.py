@@ -20,10 +20,11 @@ import yaml
 from . import metrics, volumes
 from .config import Config, config_from_dict, load_config
 from .datasets import DATASETS, Scene
-from .io import (all_or_none, colour_disparity, error_image, imwrite_atomic, output_folder,
-                 write_confidence, write_disparity, write_text_atomic)
+from .io import (all_or_none, imwrite_atomic, output_folder, write_confidence,
+                 write_disparity, write_text_atomic)
 from .peers import PEER_METHODS, sgbm_disparity
 from .pipeline import run
+from .preview import colour_disparity, error_image
 
 # Re-exported: the bad-pixel functions evaluation has always offered.
 bad_pixel_map = metrics.bad_pixel_map

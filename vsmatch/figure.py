@@ -14,7 +14,7 @@ import numpy as np
 
 from .datasets import Scene
 from .evaluation import Scoring, headline_mask
-from .io import colour_disparity, error_image
+from .preview import colour_disparity, error_image
 
 #: Height of a row, pixels; each tile keeps its scene's aspect ratio.
 ROW_HEIGHT = 200

@@ -10,9 +10,13 @@ from ._kernels.arms import colour_change as colour_change_kernel
 
 def to_grey(image: np.ndarray) -> np.ndarray:
     """Grey level (float32, 0..255) of a BGR colour image or of a grey one."""
-    if image.ndim == 2:
-        return image.astype(np.float32)
-    return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    return grey_levels(image).astype(np.float32)
+
+
+def grey_levels(image: np.ndarray) -> np.ndarray:
+    """The grey image of a BGR colour image (OpenCV's weights, its dtype), or a grey one
+    as it is."""
+    return image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
 
 
 def as_channels(image: np.ndarray) -> np.ndarray:

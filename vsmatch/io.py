@@ -26,6 +26,8 @@ from .image_header import header_size
 
 #: Output formats of a disparity map, by file extension.
 DISPARITY_FORMATS = (".pfm", ".png")
+#: The image files read as views (a batch's folders, a video's folders of frames).
+IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
 
 
 class ImageError(ValueError):
@@ -615,27 +617,3 @@ def read_disparity(path: str | Path) -> np.ndarray:
     if path.suffix.lower() == ".png":
         return png16_to_disparity(image)
     return image.astype(np.float32)
-
-
-def colour_disparity(disp: np.ndarray, max_disp: float, min_disp: float = 0) -> np.ndarray:
-    """A colour-mapped view (BGR uint8) of a disparity map over ``min_disp .. max_disp``;
-    invalid pixels black."""
-    valid = np.isfinite(disp)
-    scaled = np.zeros(disp.shape, dtype=np.uint8)
-    scale = 255.0 / max(max_disp - min_disp, 1e-6)
-    scaled[valid] = np.clip((disp[valid] - min_disp) * scale, 0, 255).astype(np.uint8)
-    out = cv2.applyColorMap(scaled, cv2.COLORMAP_TURBO)
-    out[~valid] = 0
-    return out
-
-
-def error_image(disp: np.ndarray, bad: np.ndarray, evaluated: np.ndarray,
-                max_disp: float) -> np.ndarray:
-    """The disparity in grey with bad pixels red and pixels not evaluated darkened."""
-    valid = np.isfinite(disp)
-    grey = np.zeros(disp.shape, dtype=np.uint8)
-    grey[valid] = np.clip(disp[valid] * (255.0 / max(max_disp, 1e-6)), 0, 255).astype(np.uint8)
-    out = cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR)
-    out[~evaluated] //= 3
-    out[bad & evaluated] = (0, 0, 255)
-    return out

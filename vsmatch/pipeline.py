@@ -14,6 +14,7 @@ from . import confidence, exposure, photometric, planes, pyramid, scale
 from . import temporal as video
 from .checks import check_pair, check_views  # noqa: F401  (the inputs' checks, re-exported)
 from .config import Config, load_config
+from .images import to_grey
 from .level import solve
 from .result import Learnt, MatchResult, learn, timed
 from .temporal import Memory, Temporal
@@ -42,7 +43,7 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Conf
     """Disparities ``0 .. max_disp``: near the last frame's when a stream's memory allows."""
     if temporal is None:
         return _search_whole_range(left, right, max_disp, cfg)
-    grey = video.grey_of(left)
+    grey = to_grey(left)
     memory = temporal.memory
     temporal.reason = video.full_search_reason(memory, grey, max_disp, cfg.temporal)
     if temporal.reason is None:

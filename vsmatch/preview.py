@@ -1,4 +1,5 @@
-"""``--preview``: the disparity as a picture a person reads at a glance.
+"""Pictures of disparities: the colour map, error images, and ``--preview``, the
+disparity as a picture a person reads at a glance.
 
 The colours span the disparities present (not the whole search range, which would
 squeeze a scene of 0..130 into part of a 0..173 scale); a colour bar beside the image
@@ -20,6 +21,30 @@ HATCH_SPACING = 6
 #: Width of the colour bar and of the gap and labels beside it, in pixels.
 BAR_WIDTH = 14
 LABEL_WIDTH = 52
+
+
+def colour_disparity(disp: np.ndarray, max_disp: float, min_disp: float = 0) -> np.ndarray:
+    """A colour-mapped view (BGR uint8) of a disparity map over ``min_disp .. max_disp``;
+    invalid pixels black."""
+    valid = np.isfinite(disp)
+    scaled = np.zeros(disp.shape, dtype=np.uint8)
+    scale = 255.0 / max(max_disp - min_disp, 1e-6)
+    scaled[valid] = np.clip((disp[valid] - min_disp) * scale, 0, 255).astype(np.uint8)
+    out = cv2.applyColorMap(scaled, cv2.COLORMAP_TURBO)
+    out[~valid] = 0
+    return out
+
+
+def error_image(disp: np.ndarray, bad: np.ndarray, evaluated: np.ndarray,
+                max_disp: float) -> np.ndarray:
+    """The disparity in grey with bad pixels red and pixels not evaluated darkened."""
+    valid = np.isfinite(disp)
+    grey = np.zeros(disp.shape, dtype=np.uint8)
+    grey[valid] = np.clip(disp[valid] * (255.0 / max(max_disp, 1e-6)), 0, 255).astype(np.uint8)
+    out = cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR)
+    out[~evaluated] //= 3
+    out[bad & evaluated] = (0, 0, 255)
+    return out
 
 
 def colour_range(disp: np.ndarray, trusted: np.ndarray) -> tuple[float, float]:

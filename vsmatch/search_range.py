@@ -30,6 +30,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from .images import grey_levels
+
 #: Features are found on the pair reduced to at most this many columns.
 FEATURE_WIDTH = 1280
 #: When the range is given, the pair is still checked (swapped, unrectified) on features
@@ -226,10 +228,6 @@ def pair_problem(matches: FeatureMatches) -> str | None:
     return None
 
 
-def _grey(image: np.ndarray) -> np.ndarray:
-    return image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
-
-
 def _reduced(image: np.ndarray, factor: int) -> np.ndarray:
     if factor == 1:
         return image
@@ -246,7 +244,7 @@ def feature_matches(left: np.ndarray, right: np.ndarray, max_width: int = FEATUR
     points = []
     if left.shape[0] // factor < FEATURE_MIN_ROWS:  # too thin to find features in
         return FeatureMatches(*np.empty((4, 0)), height=left.shape[0], factor=factor)
-    grey_l, grey_r = (_reduced(_grey(v), factor) for v in (left, right))
+    grey_l, grey_r = (_reduced(grey_levels(v), factor) for v in (left, right))
     sift = cv2.SIFT_create(nfeatures=MAX_FEATURES, contrastThreshold=0.02)
     keys_l, desc_l = sift.detectAndCompute(grey_l, None)
     keys_r, desc_r = sift.detectAndCompute(grey_r, None)

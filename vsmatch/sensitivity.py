@@ -23,8 +23,13 @@ def visual_sensitivity(grey: np.ndarray, direction: bool = True
     gives None for theta: only direction-guided arms (``arms.kappa`` != 0) read it, and
     atan2 costs ten times the rest.
     """
-    grey = np.ascontiguousarray(grey, dtype=np.float32)
-    gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT_101)
-    gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT_101)
+    gx, gy = sobel(np.ascontiguousarray(grey, dtype=np.float32))
     theta = np.arctan2(gy, gx).astype(np.float32) if direction else None
     return np.sqrt(gx * gx + gy * gy), theta
+
+
+def sobel(grey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The 3 x 3 Sobel derivatives along x and y (float32; borders mirrored)."""
+    gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT_101)
+    gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT_101)
+    return gx, gy

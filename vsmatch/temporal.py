@@ -21,7 +21,6 @@ import numpy as np
 
 from . import bands as band_tools
 from .config import Config, TemporalConfig
-from .images import to_grey
 
 #: The window over which a pixel's change between frames is averaged (noise cancels).
 CHANGE_WINDOW = 5
@@ -52,10 +51,6 @@ class Temporal:
     def __init__(self):
         self.memory: Memory | None = None
         self.reason: str | None = None
-
-
-def grey_of(view: np.ndarray) -> np.ndarray:
-    return to_grey(view).astype(np.float32)
 
 
 #: Below this phase-correlation peak the views' shift is not trusted (taken as none).

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .. import evaluation, io, pipeline, synthetic
+from .. import evaluation, io, pipeline, preview, synthetic
 from .common import (announce_compilation, check_new_folder, config_option, echo, examples,
                      friendly_errors, verbosity_options)
 
@@ -55,9 +55,9 @@ def demo(ctx, out_dir, overwrite, config):
         io.imwrite_atomic(folder / "right.png", pair.right)
         io.write_disparity(folder / "disparity.pfm", disp)
         io.imwrite_atomic(folder / "disparity_colour.png",
-                          io.colour_disparity(disp, pair.max_disp))
+                          preview.colour_disparity(disp, pair.max_disp))
         io.imwrite_atomic(folder / "error.png",
-                          io.error_image(disp, bad, pair.nonocc, pair.max_disp))
+                          preview.error_image(disp, bad, pair.nonocc, pair.max_disp))
         io.write_text_atomic(folder / MARKER, f"Written by 'vsmatch demo': "
                              f"{', '.join(DEMO_FILES)}.\n{summary}\n")
     echo(ctx, summary)
