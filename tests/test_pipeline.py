@@ -89,3 +89,24 @@ def test_mismatched_sizes_and_tiny_images_are_refused(rng):
         vsmatch.match(tiny, tiny, max_disp=2, config=Config())
     with pytest.raises(ValueError, match="must be uint8"):
         vsmatch.match(a.astype(np.float32), a.astype(np.float32), max_disp=4)
+
+
+@pytest.mark.parametrize("aggregate, calls", [(True, 2), (False, 1)])
+def test_bands_aggregation_switches_the_finer_levels_aggregation_only(rng, monkeypatch,
+                                                                      aggregate, calls):
+    from vsmatch import aggregation
+    from vsmatch.config import load_config
+
+    shapes = []
+    real = aggregation.aggregate_cross
+
+    def counted(volume, *args, **kwargs):
+        shapes.append(volume.shape)
+        return real(volume, *args, **kwargs)
+
+    monkeypatch.setattr(aggregation, "aggregate_cross", counted)
+    left, right = random_pair(rng, height=64, width=160, shift=6)
+    cfg = config_from_dict({"bands": {"aggregation": aggregate}}, base=load_config("fast"))
+    result = pipeline.run(left, right, max_disp=24, config=cfg)
+    assert result.levels == 1 and len(shapes) == calls
+    assert shapes[0][:2] == (32, 80)  # the coarse level's full search always aggregates

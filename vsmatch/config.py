@@ -232,6 +232,9 @@ class BandsConfig:
         "Scanline optimisation at the finer levels (when the scanline stage is on)."))
     band: int = _param(0, 0, 64, doc="Pixels added on each side of a band.")
     support: int = _param(8, 1, 255, doc="Longest arm at the finer levels, pixels.")
+    aggregation: bool = _param(True, doc=(
+        "Cross-region aggregation at the finer levels (when the aggregation stage is on); "
+        "without it the scanline optimisation alone smooths the bands' costs."))
     max_band: int = _param(8, 3, 4096, doc=(
         "Most candidates a pixel keeps at a finer level; a wider 3 × 3 range is cut to "
         "this many around the pixel's own estimate."))

@@ -64,21 +64,23 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
 
     arms_cfg = cfg.arms
     scanline = cfg.scanline.enabled
+    aggregate = cfg.aggregation.iterations > 0
     if bands is not None and not bands.is_full:  # the finer levels' options
         scanline = scanline and cfg.bands.scanline
+        aggregate = aggregate and cfg.bands.aggregation
         support = cfg.bands.support
         arms_cfg = dataclasses.replace(arms_cfg, l1=min(arms_cfg.l1, support),
                                        l2=min(arms_cfg.l2, support))
     arms_l = arms_r = None
-    if cfg.aggregation.iterations > 0 or cfg.voting.enabled:
+    if aggregate or cfg.voting.enabled:
         with stage("arms"):
             arms_l = aggregation.cross_arms(left, theta_l, grad_l, arms_cfg)
-            if cfg.aggregation.iterations > 0:
+            if aggregate:
                 arms_r = aggregation.cross_arms(right, theta_r, grad_r, arms_cfg)
     # One work volume serves aggregation, then holds the scanline costs: the cost volume
     # is allocated twice, not three times (allocation is a measurable share of the time).
     work = volumes.volume("work", volume.shape)
-    if cfg.aggregation.iterations > 0:
+    if aggregate:
         with stage("aggregation"):
             volume = aggregation.aggregate_cross(volume, arms_l, arms_r, scratch=work,
                                                  iterations=cfg.aggregation.iterations,
