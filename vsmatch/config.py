@@ -222,6 +222,36 @@ class PlanesConfig:
 
 
 @dataclass(frozen=True)
+class SurfacesConfig:
+    """Planes carried across wide regions (``vsmatch.surfaces``): crosses grown on the left
+    view reduced ``levels`` times with the colour threshold ``tau`` (arms of at most ``l2``
+    full-size pixels) fit planes through their pixels of confidence ``fit`` or more; a pixel
+    of confidence below ``take`` takes its region's plane where the region spreads at most
+    ``max_spread`` about it and the plane's matching cost over a ``window`` square is at
+    most ``tolerance`` above the found disparities'."""
+
+    enabled: bool = _param(False, doc="Planes across wide regions for unsure pixels.")
+    levels: int = _param(3, 1, 5, doc="Pyramid levels down where the wide regions grow.")
+    l2: int = _param(255, 2, 255, doc="Longest arm of a wide region, full-size pixels.")
+    tau: float = _param(30.0, 0.0, 255.0, doc=(
+        "Colour difference (grey levels) a wide region's arm crosses."))
+    fit: float = _param(0.5, 0.0, 1.0, doc="Least confidence of the pixels a plane is fitted to.")
+    take: float = _param(0.3, 0.0, 1.0, doc="A pixel below this confidence may take its plane.")
+    min_share: float = _param(0.05, 0.0, 1.0, doc=(
+        "Share of a region's pixels that must be sure for a plane."))
+    max_spread: float = _param(1.0, 0.0, 100.0, doc=(
+        "A region's sure disparities spread more than this (pixels) about its plane: none."))
+    iterations: int = _param(3, 1, 10, doc=(
+        "Least-squares fits, each on the sure pixels within inlier of the last."))
+    inlier: float = _param(1.0, 0.0, 100.0, doc=(
+        "Distance (pixels) to the plane of the pixels the next fit uses."))
+    window: int = _param(7, 1, 63, doc=(
+        "Square (pixels) the matching cost of the plane and of the match is averaged over."))
+    tolerance: float = _param(0.05, 0.0, 3.0, doc=(
+        "How much more the plane's mean matching cost may be than the match's."))
+
+
+@dataclass(frozen=True)
 class BandsConfig:
     """The band search above the coarsest level (``vsmatch.pyramid``): each pixel searches
     the coarse estimate's 3 x 3 range widened by ``band`` (at most ``max_band``
@@ -342,6 +372,7 @@ class Config:
     discontinuity: DiscontinuityConfig = field(default_factory=DiscontinuityConfig)
     subpixel: SubpixelConfig = field(default_factory=SubpixelConfig)
     planes: PlanesConfig = field(default_factory=PlanesConfig)
+    surfaces: SurfacesConfig = field(default_factory=SurfacesConfig)
     photometric: PhotometricConfig = field(default_factory=PhotometricConfig)
     bands: BandsConfig = field(default_factory=BandsConfig)
     temporal: TemporalConfig = field(default_factory=TemporalConfig)

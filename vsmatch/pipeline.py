@@ -10,7 +10,7 @@ import functools
 
 import numpy as np
 
-from . import confidence, exposure, photometric, planes, pyramid, scale
+from . import confidence, exposure, photometric, planes, pyramid, scale, surfaces
 from . import temporal as video
 from .checks import check_pair, check_views  # noqa: F401  (the inputs' checks, re-exported)
 from .config import Config, load_config
@@ -79,7 +79,14 @@ def _search_whole_range(left: np.ndarray, right: np.ndarray, max_disp: int,
     result.seconds = {**seconds, **result.seconds}
     result.photometric = correction
     _fit_planes(result, left, max_disp)
-    return _with_confidence(result, left, max_disp)
+    result = _with_confidence(result, left, max_disp)
+    # 6. Unsure pixels take the plane of a wide region (a blank wall) where it holds.
+    if cfg.surfaces.enabled and result.labels is not None:
+        with timed(result.seconds, "surfaces"):
+            result.disparity = surfaces.spread_planes(
+                result.disparity, result.confidence, result.labels, left, right, max_disp,
+                result.config, result.colour_weight)
+    return result
 
 
 def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int, memory: Memory,

@@ -71,15 +71,24 @@ def _block_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray,
     # The margin rows' own vertical arms may reach past the block: cut there (the core
     # rows' regions lie inside the margin, so theirs are whole).
     keep_arms_inside(arms)
+    return region_planes(disp, kept, arms, cfg.iterations, cfg.min_share, cfg.inlier)
+
+
+def region_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, iterations: int,
+                  min_share: float, inlier: float) -> tuple[np.ndarray, np.ndarray]:
+    """Each pixel's cross region's least-squares plane at the pixel, through the region's
+    ``kept`` pixels, and their spread about it (NaN where they are fewer than ``min_share``
+    of the region); ``iterations`` fits, each on the kept pixels within ``inlier`` of the
+    last plane."""
     weight = kept.astype(np.float32)
     moments = np.empty(disp.shape + (N_MOMENTS,), np.float32)
     scratch, sums = np.empty_like(moments), np.empty_like(moments)
     plane = np.empty(disp.shape, np.float32)
     spread = np.empty(disp.shape, np.float32)
-    for _ in range(cfg.iterations):
+    for _ in range(iterations):
         plane_moments(disp, weight, moments)
         region_sums(moments, arms, scratch, sums)
-        plane_values(sums, np.float32(cfg.min_share), np.float32(MIN_SPREAD), plane, spread)
+        plane_values(sums, np.float32(min_share), np.float32(MIN_SPREAD), plane, spread)
         with np.errstate(invalid="ignore"):
-            weight = (kept & (np.abs(disp - plane) <= cfg.inlier)).astype(np.float32)
+            weight = (kept & (np.abs(disp - plane) <= inlier)).astype(np.float32)
     return plane, spread
