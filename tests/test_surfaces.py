@@ -54,11 +54,12 @@ def test_a_plane_that_explains_the_views_worse_is_refused(pair):
     disp[around] += 3.0
     disp[BLOCK] = pair.disparity[BLOCK]
     confidence[BLOCK] = 0.1
+    # Bridges (no cost check in accurate) would carry the sure pixels' error across: off.
     kept = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                         _config())
+                         _config(bridge=0))
     assert np.mean(np.abs(kept[BLOCK] - pair.disparity[BLOCK]) <= 1.0) > 0.95
     lenient = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                            _config(tolerance=3.0))
+                            _config(tolerance=3.0, bridge=0))
     assert np.mean(np.abs(lenient[BLOCK] - pair.disparity[BLOCK]) > 1.0) > 0.5  # taken
 
 
@@ -67,3 +68,44 @@ def test_without_unsure_pixels_nothing_changes(pair):
     out = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
                         _config())
     assert np.array_equal(out, disp) and out is not disp
+
+
+def test_an_unsure_board_between_agreeing_rows_takes_the_line_between_them(pair):
+    """No region's plane reaches the board (min_share 1: no plane at all); the sure rows
+    above and below it bridge it, and only where they are close enough and agree."""
+    disp, confidence, labels = _inputs(pair)
+    board = (slice(100, 130), BLOCK[1])  # on the background plane, 31 rows between sure rows
+    disp[board] = 2.0
+    confidence[board] = 0.1
+    bridged = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
+                            _config(min_share=1.0, bridge=64))
+    truth = pair.disparity[board]
+    assert np.mean(np.abs(bridged[board] - truth) <= 1.0) > 0.95
+    sure = confidence >= 0.5
+    assert np.array_equal(bridged[sure], disp[sure])
+    apart = disp.copy()
+    apart[130:, BLOCK[1]] += 3.0  # below the board 3 px farther than above it,
+    apart[100:130, BLOCK[1].stop:] += 3.0  # and to its right than to its left
+    for ends, changes in ((disp, {"bridge": 0}), (disp, {"bridge": 20}),
+                          (apart, {"bridge": 64})):
+        out = spread_planes(ends, confidence, labels, pair.left, pair.right, pair.max_disp,
+                            _config(min_share=1.0, **changes))
+        # Off, a gap (31 rows) longer than the bridge, ends that disagree: nothing crosses.
+        assert np.mean(out[board] == 2.0) > 0.95, changes
+
+
+def test_bridges_follow_columns_first_then_rows():
+    from vsmatch.surfaces import _bridges
+
+    sure = np.full((9, 9), np.nan, np.float32)
+    sure[0, :], sure[8, :] = 10.0, 12.0  # columns: 10 above, 12 below
+    sure[:, 0], sure[:, 8] = 20.0, 20.0  # rows: 20 at both ends (the columns win)
+    unsure = np.zeros((9, 9), bool)
+    unsure[1:8, 1:8] = True
+    out = _bridges(sure, unsure, span=8, agree=2.0)
+    assert np.allclose(out[4, 1:8], 11.0) and np.allclose(out[1, 4], 10.25)
+    assert np.isnan(out[0, 0]) and np.isnan(out[8, 4])  # sure or not unsure: no bridge
+    rows_only = _bridges(np.where(np.arange(9)[:, None] % 8 == 0, np.nan, sure), unsure,
+                         span=8, agree=2.0)
+    assert np.allclose(rows_only[1:8, 1:8], 20.0)
+    assert np.isnan(_bridges(sure, unsure, span=7, agree=2.0)[4, 4])  # too far apart

@@ -228,7 +228,10 @@ class SurfacesConfig:
     full-size pixels) fit planes through their pixels of confidence ``fit`` or more; a pixel
     of confidence below ``take`` takes its region's plane where the region spreads at most
     ``max_spread`` about it and the plane's matching cost over a ``window`` square is at
-    most ``tolerance`` above the found disparities'."""
+    most ``tolerance`` above the found disparities'. Then a pixel still unsure between two
+    sure pixels at most ``bridge`` apart along its column (then its row) whose
+    disparities agree within ``bridge_agree`` takes the line between them, where its
+    window cost is at most ``bridge_tolerance`` above the match's (when set)."""
 
     enabled: bool = _param(False, doc="Planes across wide regions for unsure pixels.")
     levels: int = _param(3, 1, 5, doc="Pyramid levels down where the wide regions grow.")
@@ -249,6 +252,14 @@ class SurfacesConfig:
         "Square (pixels) the matching cost of the plane and of the match is averaged over."))
     tolerance: float = _param(0.05, 0.0, 3.0, doc=(
         "How much more the plane's mean matching cost may be than the match's."))
+    bridge: int = _param(0, 0, 1024, doc=(
+        "Longest gap (pixels) along a column or row between two sure pixels that an "
+        "unsure pixel between them takes the line of (a shelf's board, a wall); 0: off."))
+    bridge_agree: float = _param(2.0, 0.0, 100.0, doc=(
+        "Most the two ends of a bridge may differ (pixels)."))
+    bridge_tolerance: float | None = _param(None, 0.0, 3.0, nullable=True, doc=(
+        "How much more a bridge's mean matching cost may be than the match's; null: no "
+        "check."))
 
 
 @dataclass(frozen=True)

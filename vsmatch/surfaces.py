@@ -11,6 +11,10 @@ region's plane, where the region's disparities lie close about the plane and whe
 plane explains the views as well as the match did: the matching cost of the plane's
 disparities, averaged over a window around the pixel, is at most ``tolerance`` above that
 of the disparities found.
+
+What no region's plane reaches (a shelf's board, whose crosses hold no sure pixel) may be
+bridged: an unsure pixel between two sure pixels of its column (then of its row) that lie
+close and agree takes the line between them.
 """
 
 from __future__ import annotations
@@ -41,16 +45,57 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     plane, spread = region_planes(disp, sure, arms, s.iterations, s.min_share, s.inlier)
     with np.errstate(invalid="ignore"):
         take = np.isfinite(plane) & (spread <= s.max_spread) & (confidence < s.take)
-    if not take.any():
-        return disp.copy()
-    proposed = np.where(take, plane, disp)
-    found_cost = _window_cost(left, right, disp, max_disp, cfg, colour_weight)
-    plane_cost = _window_cost(left, right, proposed, max_disp, cfg, colour_weight)
-    with np.errstate(invalid="ignore"):
-        take &= plane_cost <= found_cost + s.tolerance
     out = disp.copy()
-    out[take] = plane[take]
+    found_cost = None
+    if take.any():
+        proposed = np.where(take, plane, disp)
+        found_cost = _window_cost(left, right, disp, max_disp, cfg, colour_weight)
+        plane_cost = _window_cost(left, right, proposed, max_disp, cfg, colour_weight)
+        with np.errstate(invalid="ignore"):
+            take &= plane_cost <= found_cost + s.tolerance
+        out[take] = plane[take]
+    if s.bridge > 0:
+        unsure = (confidence < s.take) & ~take
+        bridged = _bridges(np.where(sure, disp, np.nan), unsure, s.bridge, s.bridge_agree)
+        across = np.isfinite(bridged)
+        if s.bridge_tolerance is not None and across.any():
+            if found_cost is None:
+                found_cost = _window_cost(left, right, disp, max_disp, cfg, colour_weight)
+            bridge_cost = _window_cost(left, right, np.where(across, bridged, out), max_disp,
+                                       cfg, colour_weight)
+            with np.errstate(invalid="ignore"):
+                across &= bridge_cost <= found_cost + s.bridge_tolerance
+        out[across] = bridged[across]
     return np.clip(out, 0, max_disp, out=out)
+
+
+def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float) -> np.ndarray:
+    """Per ``unsure`` pixel, the line between the nearest sure disparities (``sure``: NaN
+    elsewhere) above and below it in its column, where they are at most ``span`` rows
+    apart and differ by at most ``agree``; failing that, the same along its row (NaN where
+    neither holds)."""
+    bridged = _column_bridges(sure, unsure, span, agree)
+    along_rows = _column_bridges(sure.T, unsure.T, span, agree).T
+    return np.where(np.isfinite(bridged), bridged, along_rows)
+
+
+def _column_bridges(sure: np.ndarray, unsure: np.ndarray, span: int,
+                    agree: float) -> np.ndarray:
+    """:func:`_bridges` along the columns only."""
+    height, width = sure.shape
+    rows = np.arange(height)[:, None]
+    known = np.isfinite(sure)
+    # The row of the nearest sure pixel above (at or before) and below each pixel.
+    above = np.maximum.accumulate(np.where(known, rows, -1), axis=0)
+    below = np.minimum.accumulate(np.where(known, rows, height)[::-1], axis=0)[::-1]
+    ends = unsure & (above >= 0) & (below < height) & (below - above <= span)
+    columns = np.broadcast_to(np.arange(width)[None, :], sure.shape)
+    top = sure[np.clip(above, 0, height - 1), columns]
+    bottom = sure[np.clip(below, 0, height - 1), columns]
+    with np.errstate(invalid="ignore"):
+        ends &= np.abs(top - bottom) <= agree
+        share = (rows - above) / np.maximum(below - above, 1)
+        return np.where(ends, top + share * (bottom - top), np.nan).astype(np.float32)
 
 
 def _wide_arms(arms: ArmsConfig, s: SurfacesConfig) -> ArmsConfig:
