@@ -94,6 +94,22 @@ def test_an_unsure_board_between_agreeing_rows_takes_the_line_between_them(pair)
         assert np.mean(out[board] == 2.0) > 0.95, changes
 
 
+def test_a_thin_object_in_front_is_not_bridged_over(pair):
+    """An unsure strip matched 15 px in front of the surface above and below it (an
+    armrest before a chair's back) keeps its match; a bridge may put a pixel at most
+    ``bridge_behind`` behind its own."""
+    disp, confidence, labels = _inputs(pair)
+    strip = (slice(100, 110), BLOCK[1])
+    disp[strip] += 15.0
+    confidence[strip] = 0.1
+    kept = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
+                         _config(min_share=1.0, bridge=64))
+    assert np.array_equal(kept[strip], disp[strip])
+    crossed = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
+                            _config(min_share=1.0, bridge=64, bridge_behind=100.0))
+    assert np.mean(np.abs(crossed[strip] - pair.disparity[strip]) <= 1.0) > 0.95
+
+
 def test_bridges_follow_columns_first_then_rows():
     from vsmatch.surfaces import _bridges
 

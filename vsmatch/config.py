@@ -230,8 +230,9 @@ class SurfacesConfig:
     ``max_spread`` about it and the plane's matching cost over a ``window`` square is at
     most ``tolerance`` above the found disparities'. Then a pixel still unsure between two
     sure pixels at most ``bridge`` apart along its column (then its row) whose
-    disparities agree within ``bridge_agree`` takes the line between them, where its
-    window cost is at most ``bridge_tolerance`` above the match's (when set)."""
+    disparities agree within ``bridge_agree`` takes the line between them, unless that is
+    more than ``bridge_behind`` below its own disparity, and where its window cost is at
+    most ``bridge_tolerance`` above the match's (when set)."""
 
     enabled: bool = _param(False, doc="Planes across wide regions for unsure pixels.")
     levels: int = _param(3, 1, 5, doc="Pyramid levels down where the wide regions grow.")
@@ -257,6 +258,9 @@ class SurfacesConfig:
         "unsure pixel between them takes the line of (a shelf's board, a wall); 0: off."))
     bridge_agree: float = _param(2.0, 0.0, 100.0, doc=(
         "Most the two ends of a bridge may differ (pixels)."))
+    bridge_behind: float = _param(8.0, 0.0, 1024.0, doc=(
+        "Most a bridge may put a pixel behind its own match (pixels of disparity): a thin "
+        "object in front of a surface is not bridged over."))
     bridge_tolerance: float | None = _param(None, 0.0, 3.0, nullable=True, doc=(
         "How much more a bridge's mean matching cost may be than the match's; null: no "
         "check."))

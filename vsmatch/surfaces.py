@@ -14,7 +14,7 @@ of the disparities found.
 
 What no region's plane reaches (a shelf's board, whose crosses hold no sure pixel) may be
 bridged: an unsure pixel between two sure pixels of its column (then of its row) that lie
-close and agree takes the line between them.
+close and agree takes the line between them, unless that puts it far behind its own match.
 """
 
 from __future__ import annotations
@@ -57,7 +57,10 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     if s.bridge > 0:
         unsure = (confidence < s.take) & ~take
         bridged = _bridges(np.where(sure, disp, np.nan), unsure, s.bridge, s.bridge_agree)
-        across = np.isfinite(bridged)
+        # Never far behind the pixel's own match: a thin object in front of one surface (an
+        # armrest before a chair's back) is no gap in it.
+        with np.errstate(invalid="ignore"):
+            across = np.isfinite(bridged) & ~(bridged < out - s.bridge_behind)
         if s.bridge_tolerance is not None and across.any():
             if found_cost is None:
                 found_cost = _window_cost(left, right, disp, max_disp, cfg, colour_weight)
