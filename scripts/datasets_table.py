@@ -1,0 +1,67 @@
+"""One config over every dataset at once, as parameters are chosen: each dataset's mean
+headline figure (nonocc bad 1.0 on middlebury2, middlebury-third and ETH3D, bad 2.0 on
+Middlebury 2014 quarter, D1 on KITTI), the standard scenes apart from the hard ones
+(Vintage, terrains_2l, terrains_2s) and the hard ones alone, on one line.
+
+    python scripts/datasets_table.py CONFIG [section.key=value ...] [--data-root DIR]
+
+``section.key=value`` changes one key of the config (YAML values: ``null``, ``true``, 4):
+``python scripts/datasets_table.py accurate surfaces.bridge=128``. The figures are those of
+``vsmatch eval`` on each dataset.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+import yaml
+
+from vsmatch import datasets, evaluation
+from vsmatch.config import config_from_dict, load_config
+
+DATASETS = ("middlebury2", "middlebury-third", "middlebury2014-quarter", "kitti2015", "eth3d")
+#: Scenes kept out of the standard means (the README's tables), shown on their own.
+HARD = ("Vintage", "terrains_2l", "terrains_2s")
+
+
+def changed_config(name: str, changes: list[str]):
+    """The config ``name`` with each ``section.key=value`` of ``changes`` applied."""
+    values = load_config(name).to_dict()
+    for change in changes:
+        key, value = change.split("=", 1)
+        *sections, last = key.split(".")
+        node = values
+        for section in sections:
+            node = node[section]
+        node[last] = yaml.safe_load(value)
+    return config_from_dict(values)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("config")
+    parser.add_argument("changes", nargs="*", metavar="section.key=value")
+    parser.add_argument("--data-root", default=None)
+    args = parser.parse_args()
+    cfg = changed_config(args.config, args.changes)
+    start = time.perf_counter()
+    parts, hard = [], {}
+    for name in DATASETS:
+        report = evaluation.evaluate(datasets.load_dataset(name, args.data_root), {"m": cfg},
+                                     dataset=name)
+        mask = "all" if name == "kitti2015" else "nonocc"  # KITTI's D1 counts every pixel
+        figures = {scene: s[mask] for scene, s in report["methods"]["m"]["scenes"].items()}
+        standard = [v for scene, v in figures.items() if scene not in HARD]
+        hard.update({scene: v for scene, v in figures.items() if scene in HARD})
+        text = f"{name} {np.mean(standard):.2f}"
+        if len(standard) < len(figures):
+            text += f" (all {np.mean(list(figures.values())):.2f})"
+        parts.append(text)
+    hard_text = ", ".join(f"{scene} {value:.2f}" for scene, value in hard.items())
+    print(f"{' | '.join(parts)} | hard: {hard_text} | {time.perf_counter() - start:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
