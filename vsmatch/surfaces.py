@@ -86,13 +86,13 @@ def _column_bridges(sure: np.ndarray, unsure: np.ndarray, span: int,
                     agree: float) -> np.ndarray:
     """:func:`_bridges` along the columns only."""
     height, width = sure.shape
-    rows = np.arange(height)[:, None]
+    rows = np.arange(height, dtype=np.int32)[:, None]  # int32: a camera-size pair's maps
     known = np.isfinite(sure)
     # The row of the nearest sure pixel above (at or before) and below each pixel.
-    above = np.maximum.accumulate(np.where(known, rows, -1), axis=0)
-    below = np.minimum.accumulate(np.where(known, rows, height)[::-1], axis=0)[::-1]
+    above = np.maximum.accumulate(np.where(known, rows, np.int32(-1)), axis=0)
+    below = np.minimum.accumulate(np.where(known, rows, np.int32(height))[::-1], axis=0)[::-1]
     ends = unsure & (above >= 0) & (below < height) & (below - above <= span)
-    columns = np.broadcast_to(np.arange(width)[None, :], sure.shape)
+    columns = np.arange(width, dtype=np.int32)[None, :]
     top = sure[np.clip(above, 0, height - 1), columns]
     bottom = sure[np.clip(below, 0, height - 1), columns]
     with np.errstate(invalid="ignore"):
