@@ -38,7 +38,7 @@ def test_an_unsure_wrong_block_takes_its_planes_value(pair):
     disp[BLOCK] = 2.0  # far from the plane's 6 + 10 x / 320 (about 15)
     confidence[BLOCK] = 0.1
     out = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                        _config())
+                        _config()).disparity
     truth = pair.disparity[BLOCK]
     assert np.mean(np.abs(out[BLOCK] - truth) <= 1.0) > 0.95
     sure = confidence >= 0.5
@@ -56,17 +56,17 @@ def test_a_plane_that_explains_the_views_worse_is_refused(pair):
     confidence[BLOCK] = 0.1
     # Bridges (no cost check in accurate) would carry the sure pixels' error across: off.
     kept = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                         _config(bridge=0))
+                         _config(bridge=0)).disparity
     assert np.mean(np.abs(kept[BLOCK] - pair.disparity[BLOCK]) <= 1.0) > 0.95
     lenient = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                            _config(tolerance=3.0, bridge=0))
+                            _config(tolerance=3.0, bridge=0)).disparity
     assert np.mean(np.abs(lenient[BLOCK] - pair.disparity[BLOCK]) > 1.0) > 0.5  # taken
 
 
 def test_without_unsure_pixels_nothing_changes(pair):
     disp, confidence, labels = _inputs(pair)
     out = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                        _config())
+                        _config()).disparity
     assert np.array_equal(out, disp) and out is not disp
 
 
@@ -78,18 +78,23 @@ def test_an_unsure_board_between_agreeing_rows_takes_the_line_between_them(pair)
     disp[board] = 2.0
     confidence[board] = 0.1
     bridged = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                            _config(min_share=1.0, bridge=64))
+                            _config(min_share=1.0, bridge=64)).disparity
     truth = pair.disparity[board]
     assert np.mean(np.abs(bridged[board] - truth) <= 1.0) > 0.95
     sure = confidence >= 0.5
     assert np.array_equal(bridged[sure], disp[sure])
+    raised = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
+                           _config(min_share=1.0, bridge=64, bridge_confidence=0.6)).confidence
+    crossed = bridged != disp
+    assert np.all(raised[crossed] == np.float32(0.6))  # bridged: the bridges' confidence
+    assert np.array_equal(raised[~crossed], confidence[~crossed])  # elsewhere as it was
     apart = disp.copy()
     apart[130:, BLOCK[1]] += 3.0  # below the board 3 px farther than above it,
     apart[100:130, BLOCK[1].stop:] += 3.0  # and to its right than to its left
     for ends, changes in ((disp, {"bridge": 0}), (disp, {"bridge": 20}),
                           (apart, {"bridge": 64})):
         out = spread_planes(ends, confidence, labels, pair.left, pair.right, pair.max_disp,
-                            _config(min_share=1.0, **changes))
+                            _config(min_share=1.0, **changes)).disparity
         # Off, a gap (31 rows) longer than the bridge, ends that disagree: nothing crosses.
         assert np.mean(out[board] == 2.0) > 0.95, changes
 
@@ -103,10 +108,10 @@ def test_a_thin_object_in_front_is_not_bridged_over(pair):
     disp[strip] += 15.0
     confidence[strip] = 0.1
     kept = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                         _config(min_share=1.0, bridge=64))
+                         _config(min_share=1.0, bridge=64)).disparity
     assert np.array_equal(kept[strip], disp[strip])
     crossed = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                            _config(min_share=1.0, bridge=64, bridge_behind=100.0))
+                            _config(min_share=1.0, bridge=64, bridge_behind=100.0)).disparity
     assert np.mean(np.abs(crossed[strip] - pair.disparity[strip]) <= 1.0) > 0.95
 
 

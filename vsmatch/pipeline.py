@@ -83,7 +83,7 @@ def _search_whole_range(left: np.ndarray, right: np.ndarray, max_disp: int,
     # 6. Unsure pixels take the plane of a wide region (a blank wall) where it holds.
     if cfg.surfaces.enabled and result.labels is not None:
         with timed(result.seconds, "surfaces"):
-            result.disparity = surfaces.spread_planes(
+            result.disparity, result.confidence = surfaces.spread_planes(
                 result.disparity, result.confidence, result.labels, left, right, max_disp,
                 result.config, result.colour_weight)
     return result

@@ -20,6 +20,7 @@ close and agree takes the line between them, unless that puts it far behind its 
 from __future__ import annotations
 
 import dataclasses
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -32,11 +33,19 @@ from .level import matching_costs
 from .planes import region_planes
 
 
+class Spread(NamedTuple):
+    """The disparities after :func:`spread_planes`, and the confidence: a bridged pixel's
+    is raised to ``surfaces.bridge_confidence``."""
+
+    disparity: np.ndarray
+    confidence: np.ndarray
+
+
 def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
                   left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
-                  colour_weight: float = 1.0) -> np.ndarray:
+                  colour_weight: float = 1.0) -> Spread:
     """``disp`` with the unsure pixels' values replaced by their wide region's plane where
-    it holds (float32, a new array). ``right``: the view as matched (after any exposure
+    it holds, then bridged (float32, new arrays). ``right``: the view as matched (after any exposure
     correction), ``colour_weight`` the colour term's weight it was matched with."""
     s = cfg.surfaces
     arms = arms_grown_below(left, _wide_arms(cfg.arms, s), s.levels)
@@ -69,7 +78,11 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
             with np.errstate(invalid="ignore"):
                 across &= bridge_cost <= found_cost + s.bridge_tolerance
         out[across] = bridged[across]
-    return np.clip(out, 0, max_disp, out=out)
+        confidence = confidence.copy()
+        confidence[across] = np.maximum(confidence[across], np.float32(s.bridge_confidence))
+    else:
+        confidence = confidence.copy()
+    return Spread(np.clip(out, 0, max_disp, out=out), confidence)
 
 
 def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float) -> np.ndarray:
