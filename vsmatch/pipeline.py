@@ -80,7 +80,8 @@ def _search_whole_range(left: np.ndarray, right: np.ndarray, max_disp: int,
     result.photometric = correction
     _fit_planes(result, left, max_disp)
     result = _with_confidence(result, left, max_disp)
-    # 6. Unsure pixels take the plane of a wide region (a blank wall) where it holds.
+    # 6. Unsure pixels take the plane of a wide region (a blank wall) where it holds, or
+    #    the line between sure pixels on either side (a shelf's board).
     if cfg.surfaces.enabled and result.labels is not None:
         with timed(result.seconds, "surfaces"):
             result.disparity, result.confidence = surfaces.spread_planes(
