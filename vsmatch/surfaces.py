@@ -20,6 +20,7 @@ close and agree takes the line between them, unless that puts it far behind its 
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import NamedTuple
 
 import cv2
@@ -45,8 +46,8 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
                   left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
                   colour_weight: float = 1.0) -> Spread:
     """``disp`` with the unsure pixels' values replaced by their wide region's plane where
-    it holds, then bridged (float32, new arrays). ``right``: the view as matched (after any exposure
-    correction), ``colour_weight`` the colour term's weight it was matched with."""
+    it holds, then bridged (float32, new arrays). ``right``: the view as matched (after any
+    exposure correction), ``colour_weight`` the colour term's weight it was matched with."""
     s = cfg.surfaces
     arms = arms_grown_below(left, _wide_arms(cfg.arms, s), s.levels)
     disp = np.ascontiguousarray(disp, dtype=np.float32)
@@ -54,15 +55,21 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     plane, spread = region_planes(disp, sure, arms, s.iterations, s.min_share, s.inlier)
     with np.errstate(invalid="ignore"):
         take = np.isfinite(plane) & (spread <= s.max_spread) & (confidence < s.take)
-    out = disp.copy()
-    found_cost = None
-    if take.any():
-        proposed = np.where(take, plane, disp)
-        found_cost = _window_cost(left, right, disp, max_disp, cfg, colour_weight)
-        plane_cost = _window_cost(left, right, proposed, max_disp, cfg, colour_weight)
+    # The found disparities' window cost, computed once and only when a check needs it.
+    found_cost = functools.cache(
+        lambda: _window_cost(left, right, disp, max_disp, cfg, colour_weight))
+
+    def no_worse(proposed: np.ndarray, tolerance: float) -> np.ndarray:
+        """Where ``proposed``'s window cost is at most ``tolerance`` above the match's."""
+        cost = _window_cost(left, right, proposed, max_disp, cfg, colour_weight)
         with np.errstate(invalid="ignore"):
-            take &= plane_cost <= found_cost + s.tolerance
+            return cost <= found_cost() + tolerance
+
+    out = disp.copy()
+    if take.any():
+        take &= no_worse(np.where(take, plane, disp), s.tolerance)
         out[take] = plane[take]
+    confidence = confidence.copy()
     if s.bridge > 0:
         unsure = (confidence < s.take) & ~take
         bridged = _bridges(np.where(sure, disp, np.nan), unsure, s.bridge, s.bridge_agree)
@@ -71,19 +78,10 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
         with np.errstate(invalid="ignore"):
             across = np.isfinite(bridged) & ~(bridged < out - s.bridge_behind)
         if s.bridge_tolerance is not None and across.any():
-            if found_cost is None:
-                found_cost = _window_cost(left, right, disp, max_disp, cfg, colour_weight)
-            bridge_cost = _window_cost(left, right, np.where(across, bridged, out), max_disp,
-                                       cfg, colour_weight)
-            with np.errstate(invalid="ignore"):
-                across &= bridge_cost <= found_cost + s.bridge_tolerance
+            across &= no_worse(np.where(across, bridged, out), s.bridge_tolerance)
         out[across] = bridged[across]
-        confidence = confidence.copy()
         confidence[across] = np.maximum(confidence[across], np.float32(s.bridge_confidence))
-    else:
-        confidence = confidence.copy()
     return Spread(np.clip(out, 0, max_disp, out=out), confidence)
-
 
 def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float) -> np.ndarray:
     """Per ``unsure`` pixel, the line between the nearest sure disparities (``sure``: NaN
