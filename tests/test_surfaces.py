@@ -54,12 +54,13 @@ def test_a_plane_that_explains_the_views_worse_is_refused(pair):
     disp[around] += 3.0
     disp[BLOCK] = pair.disparity[BLOCK]
     confidence[BLOCK] = 0.1
-    # Bridges (no cost check in accurate) would carry the sure pixels' error across: off.
+    # Bridges and the refit (no cost check in accurate) would carry the sure pixels' error
+    # across: off.
     kept = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                         _config(bridge=0)).disparity
+                         _config(bridge=0, refit=False)).disparity
     assert np.mean(np.abs(kept[BLOCK] - pair.disparity[BLOCK]) <= 1.0) > 0.95
     lenient = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                            _config(tolerance=3.0, bridge=0)).disparity
+                            _config(tolerance=3.0, bridge=0, refit=False)).disparity
     assert np.mean(np.abs(lenient[BLOCK] - pair.disparity[BLOCK]) > 1.0) > 0.5  # taken
 
 
@@ -71,20 +72,21 @@ def test_without_unsure_pixels_nothing_changes(pair):
 
 
 def test_an_unsure_board_between_agreeing_rows_takes_the_line_between_them(pair):
-    """No region's plane reaches the board (min_share 1: no plane at all); the sure rows
-    above and below it bridge it, and only where they are close enough and agree."""
+    """No region's plane reaches the board (min_share 1: no plane at all; no refit); the
+    sure rows above and below it bridge it, and only where they are close enough and agree."""
     disp, confidence, labels = _inputs(pair)
     board = (slice(100, 130), BLOCK[1])  # on the background plane, 31 rows between sure rows
     disp[board] = 2.0
     confidence[board] = 0.1
     bridged = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                            _config(min_share=1.0, bridge=64)).disparity
+                            _config(min_share=1.0, refit=False, bridge=64)).disparity
     truth = pair.disparity[board]
     assert np.mean(np.abs(bridged[board] - truth) <= 1.0) > 0.95
     sure = confidence >= 0.5
     assert np.array_equal(bridged[sure], disp[sure])
     raised = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                           _config(min_share=1.0, bridge=64, bridge_confidence=0.6)).confidence
+                           _config(min_share=1.0, refit=False, bridge=64,
+                                   bridge_confidence=0.6)).confidence
     crossed = bridged != disp
     assert np.all(raised[crossed] == np.float32(0.6))  # bridged: the bridges' confidence
     assert np.array_equal(raised[~crossed], confidence[~crossed])  # elsewhere as it was
@@ -94,7 +96,7 @@ def test_an_unsure_board_between_agreeing_rows_takes_the_line_between_them(pair)
     for ends, changes in ((disp, {"bridge": 0}), (disp, {"bridge": 20}),
                           (apart, {"bridge": 64})):
         out = spread_planes(ends, confidence, labels, pair.left, pair.right, pair.max_disp,
-                            _config(min_share=1.0, **changes)).disparity
+                            _config(min_share=1.0, refit=False, **changes)).disparity
         # Off, a gap (31 rows) longer than the bridge, ends that disagree: nothing crosses.
         assert np.mean(out[board] == 2.0) > 0.95, changes
 
@@ -108,11 +110,42 @@ def test_a_thin_object_in_front_is_not_bridged_over(pair):
     disp[strip] += 15.0
     confidence[strip] = 0.1
     kept = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                         _config(min_share=1.0, bridge=64)).disparity
+                         _config(min_share=1.0, refit=False, bridge=64)).disparity
     assert np.array_equal(kept[strip], disp[strip])
     crossed = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                            _config(min_share=1.0, bridge=64, bridge_behind=100.0)).disparity
+                            _config(min_share=1.0, refit=False, bridge=64,
+                                    bridge_behind=100.0)).disparity
     assert np.mean(np.abs(crossed[strip] - pair.disparity[strip]) <= 1.0) > 0.95
+
+
+def test_the_refit_averages_a_boards_skewed_bridges_into_its_plane(pair):
+    """The sure rows just above the board are 1.8 px off (another surface's edge), so the
+    bridges lean towards them; the planes refitted through the sure and bridged pixels
+    together put the board back on the background's plane. A pixel no bridge reaches (its
+    ends disagree) takes the refitted plane too, and only with the refit on."""
+    disp, confidence, labels = _inputs(pair)
+    board = (slice(100, 130), BLOCK[1])
+    disp[board] = 2.0
+    confidence[board] = 0.1
+    disp[96:100, BLOCK[1]] += 1.8
+    lone = (slice(20, 24), slice(300, 304))  # in the background; no bridge: the nearest
+    disp[lone] = 2.0  # sure pixels above it and to its left are 5 px off
+    confidence[lone] = 0.1
+    disp[:20, 300:304] += 5.0
+    disp[20:24, 290:300] += 5.0
+    truth = pair.disparity
+    results = {}
+    for refit in (False, True):
+        results[refit] = spread_planes(disp, confidence, labels, pair.left, pair.right,
+                                       pair.max_disp, _config(min_share=1.0, bridge=64,
+                                                              refit=refit)).disparity
+    bridged, refitted = results[False][board], results[True][board]
+    assert np.mean(np.abs(bridged - truth[board]) <= 1.0) < 0.8  # the bridges lean
+    assert np.mean(np.abs(refitted - truth[board]) <= 1.0) > 0.95
+    assert np.all(results[False][lone] == 2.0)
+    assert np.all(np.abs(results[True][lone] - truth[lone]) <= 1.0)
+    sure = confidence >= 0.3
+    assert np.array_equal(results[True][sure], disp[sure])  # the sure pixels keep theirs
 
 
 def test_bridges_follow_columns_first_then_rows():

@@ -232,7 +232,12 @@ class SurfacesConfig:
     sure pixels at most ``bridge`` apart along its column (then its row) whose
     disparities agree within ``bridge_agree`` takes the line between them, unless that is
     more than ``bridge_behind`` below its own disparity, and where its window cost is at
-    most ``bridge_tolerance`` above the match's (when set)."""
+    most ``bridge_tolerance`` above the match's (when set). With ``refit``, the wide regions'
+    planes are then fitted again through the sure, taken and bridged pixels (where these
+    are at least ``refit_share`` of the region; each fit on those within ``refit_inlier``
+    of the last), and every pixel that was unsure takes its region's plane where the region
+    spreads at most ``max_spread`` about it; its confidence is raised to
+    ``refit_confidence`` where the plane lies within ``refit_agree`` of its disparity."""
 
     enabled: bool = _param(False, doc="Planes across wide regions for unsure pixels.")
     levels: int = _param(3, 1, 5, doc="Pyramid levels down where the wide regions grow.")
@@ -267,6 +272,19 @@ class SurfacesConfig:
     bridge_tolerance: float | None = _param(None, 0.0, 3.0, nullable=True, doc=(
         "How much more a bridge's mean matching cost may be than the match's; null: no "
         "check."))
+    refit: bool = _param(False, doc=(
+        "Refit the wide regions' planes through the sure, taken and bridged pixels, and give "
+        "every unsure pixel its region's plane."))
+    refit_share: float = _param(0.2, 0.0, 1.0, doc=(
+        "Share of a region's pixels that must be sure, taken or bridged for a refitted plane."))
+    refit_inlier: float = _param(2.0, 0.0, 100.0, doc=(
+        "Distance (pixels) to the refitted plane of the pixels the next refit uses."))
+    refit_agree: float = _param(1.0, 0.0, 100.0, doc=(
+        "A pixel given its refitted plane within this (pixels) of its own disparity is "
+        "raised to refit_confidence."))
+    refit_confidence: float = _param(0.0, 0.0, 1.0, doc=(
+        "The confidence a pixel whose refitted plane agrees with its disparity is given at "
+        "least (0: unchanged)."))
 
 
 @dataclass(frozen=True)

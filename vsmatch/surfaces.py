@@ -15,6 +15,12 @@ of the disparities found.
 What no region's plane reaches (a shelf's board, whose crosses hold no sure pixel) may be
 bridged: an unsure pixel between two sure pixels of its column (then of its row) that lie
 close and agree takes the line between them, unless that puts it far behind its own match.
+
+A bridge is one column's guess, off where the column's ends lie on other surfaces than the
+board between them. With ``refit``, the regions' planes are fitted once more through every
+pixel now filled (sure, taken, bridged): a board's bridges err either way and average into
+the board's plane, which every pixel that was unsure then takes where the region holds
+close about it (a road or wall beyond the right view's edge, too, from its visible part).
 """
 
 from __future__ import annotations
@@ -69,9 +75,11 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     if take.any():
         take &= no_worse(np.where(take, plane, disp), s.tolerance)
         out[take] = plane[take]
+    was_unsure = confidence < s.take
     confidence = confidence.copy()
+    across = np.zeros_like(take)
     if s.bridge > 0:
-        unsure = (confidence < s.take) & ~take
+        unsure = was_unsure & ~take
         bridged = _bridges(np.where(sure, disp, np.nan), unsure, s.bridge, s.bridge_agree)
         # Never far behind the pixel's own match: a thin object in front of one surface (an
         # armrest before a chair's back) is no gap in it.
@@ -81,6 +89,16 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
             across &= no_worse(np.where(across, bridged, out), s.bridge_tolerance)
         out[across] = bridged[across]
         confidence[across] = np.maximum(confidence[across], np.float32(s.bridge_confidence))
+    if s.refit:
+        plane, spread = region_planes(out, sure | take | across, arms, s.iterations,
+                                      s.refit_share, s.refit_inlier)
+        with np.errstate(invalid="ignore"):
+            settle = was_unsure & np.isfinite(plane) & (spread <= s.max_spread)
+            # Two witnesses, the pixel's own disparity and its region's plane: where they
+            # agree the pixel is more likely right than either alone.
+            agree = settle & (np.abs(plane - out) <= s.refit_agree)
+        out[settle] = plane[settle]
+        confidence[agree] = np.maximum(confidence[agree], np.float32(s.refit_confidence))
     return Spread(np.clip(out, 0, max_disp, out=out), confidence)
 
 def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float) -> np.ndarray:
