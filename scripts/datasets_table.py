@@ -16,27 +16,13 @@ import argparse
 import time
 
 import numpy as np
-import yaml
 
 from vsmatch import datasets, evaluation
-from vsmatch.config import config_from_dict, load_config
+from vsmatch.config import with_changes
 
 DATASETS = ("middlebury2", "middlebury-third", "middlebury2014-quarter", "kitti2015", "eth3d")
 #: Scenes kept out of the standard means (the README's tables), shown on their own.
 HARD = ("Vintage", "terrains_2l", "terrains_2s")
-
-
-def changed_config(name: str, changes: list[str]):
-    """The config ``name`` with each ``section.key=value`` of ``changes`` applied."""
-    values = load_config(name).to_dict()
-    for change in changes:
-        key, value = change.split("=", 1)
-        *sections, last = key.split(".")
-        node = values
-        for section in sections:
-            node = node[section]
-        node[last] = yaml.safe_load(value)
-    return config_from_dict(values)
 
 
 def main() -> None:
@@ -45,7 +31,7 @@ def main() -> None:
     parser.add_argument("changes", nargs="*", metavar="section.key=value")
     parser.add_argument("--data-root", default=None)
     args = parser.parse_args()
-    cfg = changed_config(args.config, args.changes)
+    cfg = with_changes(args.config, args.changes)
     start = time.perf_counter()
     parts, hard = [], {}
     for name in DATASETS:

@@ -203,3 +203,15 @@ def test_every_key_is_set_by_a_bundled_config():
     every = {f"{s.name}.{k.name}" for s in dataclasses.fields(Config)
              for k in dataclasses.fields(s.default_factory())}
     assert every - given == pending
+
+
+def test_with_changes_sets_keys_from_section_key_value_text():
+    from vsmatch.config import with_changes
+
+    cfg = with_changes("accurate", ["surfaces.bridge=128", "surfaces.contrast=null",
+                                    "cost.lambda_ad=40.5"])
+    assert cfg.surfaces.bridge == 128 and cfg.surfaces.contrast is None
+    assert cfg.cost.lambda_ad == 40.5
+    assert cfg.surfaces.refit == load_config("accurate").surfaces.refit  # the rest kept
+    with pytest.raises(ConfigError):
+        with_changes("default", ["surfaces.bridge=-1"])  # checked as a config file is

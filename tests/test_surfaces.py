@@ -29,6 +29,9 @@ def _inputs(pair):
 
 
 def _config(**changes):
+    # The synthetic pair's grey levels spread 71 (view_contrast): its wide regions grown as
+    # a view's of full contrast, unless a test says otherwise.
+    changes.setdefault("contrast", None)
     cfg = load_config("accurate")
     return dataclasses.replace(cfg, surfaces=dataclasses.replace(cfg.surfaces, **changes))
 
@@ -163,3 +166,17 @@ def test_bridges_follow_columns_first_then_rows():
                          span=8, agree=2.0)
     assert np.allclose(rows_only[1:8, 1:8], 20.0)
     assert np.isnan(_bridges(sure, unsure, span=7, agree=2.0)[4, 4])  # too far apart
+
+
+def test_a_dark_views_wide_regions_grow_with_a_smaller_colour_threshold():
+    from vsmatch.surfaces import _wide_arms, view_contrast
+
+    ramp = np.tile(np.arange(256, dtype=np.uint8), (8, 1))
+    assert view_contrast(ramp) == pytest.approx(204, abs=1)  # 90th less 10th percentile
+    assert view_contrast((ramp * 0.3).astype(np.uint8)) == pytest.approx(61, abs=1)
+    cfg = _config(contrast=150.0).surfaces
+    arms = load_config("accurate").arms
+    assert _wide_arms(arms, cfg, 204.0).tau1 == cfg.tau  # enough contrast: tau as it is
+    assert _wide_arms(arms, cfg, 75.0).tau1 == pytest.approx(cfg.tau / 2)
+    off = dataclasses.replace(cfg, contrast=None)
+    assert _wide_arms(arms, off, 75.0).tau1 == cfg.tau

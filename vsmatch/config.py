@@ -223,27 +223,30 @@ class PlanesConfig:
 
 @dataclass(frozen=True)
 class SurfacesConfig:
-    """Planes carried across wide regions (``vsmatch.surfaces``): crosses grown on the left
-    view reduced ``levels`` times with the colour threshold ``tau`` (arms of at most ``l2``
-    full-size pixels) fit planes through their pixels of confidence ``fit`` or more; a pixel
-    of confidence below ``take`` takes its region's plane where the region spreads at most
-    ``max_spread`` about it and the plane's matching cost over a ``window`` square is at
-    most ``tolerance`` above the found disparities'. Then a pixel still unsure between two
-    sure pixels at most ``bridge`` apart along its column (then its row) whose
-    disparities agree within ``bridge_agree`` takes the line between them, unless that is
-    more than ``bridge_behind`` below its own disparity, and where its window cost is at
+    """Planes carried across wide regions (``vsmatch.surfaces``): crosses grown on the left view
+    reduced ``levels`` times with the colour threshold ``tau`` (shrunk in a view of less
+    ``contrast``; arms of at most ``l2`` full-size pixels) fit planes through their pixels of
+    confidence ``fit`` or more; a pixel of confidence below ``take`` takes its region's plane
+    where the region spreads at most ``max_spread`` about it and the plane's matching cost over
+    a ``window`` square is at most ``tolerance`` above the found disparities'. Then a pixel
+    still unsure between two sure pixels at most ``bridge`` apart along its column (then its
+    row) whose disparities agree within ``bridge_agree`` takes the line between them, unless
+    that is more than ``bridge_behind`` below its own disparity, and where its window cost is at
     most ``bridge_tolerance`` above the match's (when set). With ``refit``, the wide regions'
-    planes are then fitted again through the sure, taken and bridged pixels (where these
-    are at least ``refit_share`` of the region; each fit on those within ``refit_inlier``
-    of the last), and every pixel that was unsure takes its region's plane where the region
-    spreads at most ``max_spread`` about it; its confidence is raised to
-    ``refit_confidence`` where the plane lies within ``refit_agree`` of its disparity."""
+    planes are then fitted again through the sure, taken and bridged pixels (where these are at
+    least ``refit_share`` of the region; each fit on those within ``refit_inlier`` of the last),
+    and every pixel that was unsure takes its region's plane where the region spreads at most
+    ``max_spread`` about it; its confidence is raised to ``refit_confidence`` where the plane
+    lies within ``refit_agree`` of its disparity."""
 
     enabled: bool = _param(False, doc="Planes across wide regions for unsure pixels.")
     levels: int = _param(3, 1, 5, doc="Pyramid levels down where the wide regions grow.")
     l2: int = _param(255, 2, 255, doc="Longest arm of a wide region, full-size pixels.")
     tau: float = _param(30.0, 0.0, 255.0, doc=(
         "Colour difference (grey levels) a wide region's arm crosses."))
+    contrast: float | None = _param(None, 1.0, 255.0, nullable=True, doc=(
+        "A view's contrast (90th less 10th percentile of its grey levels) below which tau "
+        "shrinks in proportion; null: tau whatever the contrast."))
     fit: float = _param(0.5, 0.0, 1.0, doc="Least confidence of the pixels a plane is fitted to.")
     take: float = _param(0.3, 0.0, 1.0, doc="A pixel below this confidence may take its plane.")
     min_share: float = _param(0.05, 0.0, 1.0, doc=(
@@ -614,6 +617,21 @@ def load_config(name_or_path: str | Path | Config | None = None) -> Config:
     if str(name_or_path) in bundled_config_names():
         return _bundled_config(str(name_or_path))
     return _parse_config(str(name_or_path))
+
+
+def with_changes(name_or_path: str | Path | Config | None, changes: list[str]) -> Config:
+    """The config :func:`load_config` gives, with each ``section.key=value`` of ``changes``
+    applied (the value read as YAML: ``null``, ``true``, ``4``), as scripts that try a
+    value take it: ``with_changes("accurate", ["surfaces.bridge=128"])``."""
+    values = load_config(name_or_path).to_dict()
+    for change in changes:
+        key, value = change.split("=", 1)
+        section, last = key.rsplit(".", 1)
+        node = values
+        for part in section.split("."):
+            node = node[part]
+        node[last] = yaml.safe_load(value)
+    return config_from_dict(values)
 
 
 @functools.lru_cache(maxsize=None)

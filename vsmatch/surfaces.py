@@ -36,6 +36,7 @@ from .aggregation import arms_grown_below
 from .bands import Bands
 from .config import ArmsConfig, Config, SurfacesConfig
 from .disparity import VALID
+from .images import grey_levels
 from .level import matching_costs
 from .planes import region_planes
 
@@ -55,7 +56,7 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     it holds, then bridged (float32, new arrays). ``right``: the view as matched (after any
     exposure correction), ``colour_weight`` the colour term's weight it was matched with."""
     s = cfg.surfaces
-    arms = arms_grown_below(left, _wide_arms(cfg.arms, s), s.levels)
+    arms = arms_grown_below(left, _wide_arms(cfg.arms, s, view_contrast(left)), s.levels)
     disp = np.ascontiguousarray(disp, dtype=np.float32)
     sure = (labels == VALID) & np.isfinite(disp) & (confidence >= s.fit)
     plane, spread = region_planes(disp, sure, arms, s.iterations, s.min_share, s.inlier)
@@ -130,10 +131,20 @@ def _column_bridges(sure: np.ndarray, unsure: np.ndarray, span: int,
         return np.where(ends, top + share * (bottom - top), np.nan).astype(np.float32)
 
 
-def _wide_arms(arms: ArmsConfig, s: SurfacesConfig) -> ArmsConfig:
-    """The arms config of the wide regions, its lengths in pixels of the reduced view."""
+def view_contrast(view: np.ndarray) -> float:
+    """The spread of a view's grey levels: its 90th percentile less its 10th."""
+    counts = np.cumsum(np.bincount(grey_levels(view).ravel(), minlength=256))
+    low, high = np.searchsorted(counts, [0.1 * counts[-1], 0.9 * counts[-1]])
+    return float(high - low)
+
+
+def _wide_arms(arms: ArmsConfig, s: SurfacesConfig, contrast: float) -> ArmsConfig:
+    """The arms config of the wide regions, its lengths in pixels of the reduced view; the
+    colour threshold shrinks with a view's ``contrast`` below ``s.contrast``: a dark view's
+    surfaces differ by fewer grey levels, and a region would grow across them."""
     l2 = max(2, s.l2 >> s.levels)
-    return dataclasses.replace(arms, tau1=s.tau, tau2=s.tau, l2=l2, l1=min(arms.l1, l2 - 1),
+    tau = s.tau if s.contrast is None else s.tau * min(1.0, contrast / s.contrast)
+    return dataclasses.replace(arms, tau1=tau, tau2=tau, l2=l2, l1=min(arms.l1, l2 - 1),
                                kappa=0.0, shrink=False)
 
 

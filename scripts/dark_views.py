@@ -1,0 +1,65 @@
+"""Dark views made from bright ones: how a config holds when the light goes.
+
+Each scene's two views are darkened, as an unlit scene or a short exposure records them:
+the grey levels scaled by ``--gain`` (the signal shrinks) and then each view given its own
+sensor noise of ``--sigma`` grey levels (the noise does not shrink with the light), rounded
+to 8 bits. The scene's headline figure (as ``vsmatch eval`` reports it) is printed beside the
+same config's figure on the views as they are, per dataset, for each config.
+
+    python scripts/dark_views.py CONFIG [CONFIG ...] [--gain 0.3] [--sigma 1.5]
+        [--datasets eth3d middlebury2014-quarter] [--data-root DIR] [--set section.key=value]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+
+import numpy as np
+
+from vsmatch import datasets, evaluation
+from vsmatch.config import with_changes
+
+
+def darkened(view: np.ndarray, gain: float, sigma: float, seed: int) -> np.ndarray:
+    """``view`` with its grey levels scaled by ``gain`` and its own sensor noise."""
+    noise = np.random.default_rng(seed).normal(0.0, sigma, view.shape)
+    return np.clip(np.rint(view * gain + noise), 0, 255).astype(np.uint8)
+
+
+def dark_scene(scene: datasets.Scene, gain: float, sigma: float, seed: int) -> datasets.Scene:
+    """``scene`` with both views darkened, each with its own noise (seeded by ``seed``)."""
+    return dataclasses.replace(scene, left=darkened(scene.left, gain, sigma, 2 * seed),
+                               right=darkened(scene.right, gain, sigma, 2 * seed + 1))
+
+
+def headline(report: dict, method: str) -> dict[str, float]:
+    """Each scene's headline figure (nonocc where the dataset has it, else all)."""
+    return {scene: s.get("nonocc", s.get("all"))
+            for scene, s in report["methods"][method]["scenes"].items()}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("configs", nargs="+")
+    parser.add_argument("--gain", type=float, default=0.3)
+    parser.add_argument("--sigma", type=float, default=1.5)
+    parser.add_argument("--datasets", nargs="+", default=["eth3d", "middlebury2014-quarter"])
+    parser.add_argument("--set", dest="changes", action="append", default=[],
+                        metavar="section.key=value", help="applied to every config")
+    parser.add_argument("--data-root", default=None)
+    args = parser.parse_args()
+    methods = {name: with_changes(name, args.changes) for name in args.configs}
+    for dataset in args.datasets:
+        scenes = datasets.load_dataset(dataset, args.data_root)
+        dark = [dark_scene(s, args.gain, args.sigma, seed) for seed, s in enumerate(scenes)]
+        for name, cfg in methods.items():
+            as_is = headline(evaluation.evaluate(scenes, {name: cfg}, dataset=dataset), name)
+            low = headline(evaluation.evaluate(dark, {name: cfg}, dataset=dataset), name)
+            worst = max(low, key=low.get)
+            print(f"{dataset} {name}: as is {np.mean(list(as_is.values())):.2f}, dark "
+                  f"{np.mean(list(low.values())):.2f} (worst {worst} {low[worst]:.2f})")
+
+
+if __name__ == "__main__":
+    main()
