@@ -33,12 +33,6 @@ def dark_scene(scene: datasets.Scene, gain: float, sigma: float, seed: int) -> d
                                right=darkened(scene.right, gain, sigma, 2 * seed + 1))
 
 
-def headline(report: dict, method: str) -> dict[str, float]:
-    """Each scene's headline figure (nonocc where the dataset has it, else all)."""
-    return {scene: s.get("nonocc", s.get("all"))
-            for scene, s in report["methods"][method]["scenes"].items()}
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("configs", nargs="+")
@@ -54,8 +48,10 @@ def main() -> None:
         scenes = datasets.load_dataset(dataset, args.data_root)
         dark = [dark_scene(s, args.gain, args.sigma, seed) for seed, s in enumerate(scenes)]
         for name, cfg in methods.items():
-            as_is = headline(evaluation.evaluate(scenes, {name: cfg}, dataset=dataset), name)
-            low = headline(evaluation.evaluate(dark, {name: cfg}, dataset=dataset), name)
+            as_is = evaluation.headline_figures(
+                evaluation.evaluate(scenes, {name: cfg}, dataset=dataset), name)
+            low = evaluation.headline_figures(
+                evaluation.evaluate(dark, {name: cfg}, dataset=dataset), name)
             worst = max(low, key=low.get)
             print(f"{dataset} {name}: as is {np.mean(list(as_is.values())):.2f}, dark "
                   f"{np.mean(list(low.values())):.2f} (worst {worst} {low[worst]:.2f})")

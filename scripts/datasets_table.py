@@ -37,9 +37,7 @@ def main() -> None:
     for name in DATASETS:
         report = evaluation.evaluate(datasets.load_dataset(name, args.data_root), {"m": cfg},
                                      dataset=name)
-        # The headline on the non-occluded pixels where a dataset has them (KITTI: all).
-        figures = {scene: s.get("nonocc", s.get("all"))
-                   for scene, s in report["methods"]["m"]["scenes"].items()}
+        figures = evaluation.headline_figures(report, "m")
         standard = [v for scene, v in figures.items() if scene not in HARD]
         hard.update({scene: v for scene, v in figures.items() if scene in HARD})
         text = f"{name} {np.mean(standard):.2f}"

@@ -37,7 +37,7 @@ def main() -> None:
             for disp in (result.disparity,
                          pipeline.match(s.left, s.right, max_disp=s.max_disp, config=off)):
                 scored = evaluation.score_scene(disp, s, scoring)
-                figures.append(scored.get("nonocc", scored["all"]))
+                figures.append(evaluation.headline_figure(scored))
             on_all.append(figures[0])
             off_all.append(figures[1])
             fit = result.photometric

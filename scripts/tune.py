@@ -51,7 +51,7 @@ def objective(cfg, scene_sets, noise_levels=(), seeds=1, base=None
         for s in scenes:
             disp = pipeline.match(s.left, s.right, max_disp=s.max_disp, config=cfg)
             result = evaluation.score_scene(disp, s, scoring)
-            scores.append(result.get("nonocc", result["all"]))  # KITTI: all pixels
+            scores.append(evaluation.headline_figure(result))
         means[name] = float(np.mean(scores))
     if base is None:
         return float(np.mean(list(means.values()))), means

@@ -230,6 +230,18 @@ def headline_mask(scene: Scene) -> np.ndarray:
     return scene.masks.get("nonocc", scene.masks["all"])
 
 
+def headline_figure(scored: dict[str, Any]) -> float:
+    """A scene's headline figure among its scores (:func:`score_scene`): on the
+    non-occluded pixels where the dataset has them, else on all (KITTI)."""
+    return scored.get("nonocc", scored["all"])
+
+
+def headline_figures(report: dict[str, Any], method: str) -> dict[str, float]:
+    """Each scene's :func:`headline_figure` for ``method`` in an :func:`evaluate` report."""
+    return {name: headline_figure(scored)
+            for name, scored in report["methods"][method]["scenes"].items()}
+
+
 def format_tables(report: dict[str, Any]) -> str:
     """One table per mask, shaped like the paper's Table 1: a row per method."""
     methods = report["methods"]

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from .datasets import Scene
-from .evaluation import Scoring, headline_mask
+from .evaluation import Scoring, headline_figure, headline_mask
 from .preview import colour_disparity, error_image
 
 #: Height of a row, pixels; each tile keeps its scene's aspect ratio.
@@ -42,8 +42,7 @@ def results_figure(scenes: list[Scene], report: dict[str, Any],
             disp = disparities[(method, scene.name)]
             tiles.append(colour_disparity(disp, top))
             errors = error_image(disp, scoring.bad_map(disp, scene.ground_truth), mask, top)
-            figure = report["methods"][method]["scenes"][scene.name]
-            headline = figure.get("nonocc", figure.get("all"))
+            headline = headline_figure(report["methods"][method]["scenes"][scene.name])
             tiles.append(_label(errors, f"{scene.name} {headline:.2f} %"))
         rows.append(tiles)
     return _grid(titles, rows)

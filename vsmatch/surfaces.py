@@ -43,7 +43,8 @@ from .planes import region_planes
 
 class Spread(NamedTuple):
     """The disparities after :func:`spread_planes`, and the confidence: a bridged pixel's
-    is raised to ``surfaces.bridge_confidence``."""
+    is raised to ``surfaces.bridge_confidence``, a refitted one whose plane agrees with its
+    disparity to ``surfaces.refit_confidence``."""
 
     disparity: np.ndarray
     confidence: np.ndarray
@@ -53,8 +54,9 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
                   left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
                   colour_weight: float = 1.0) -> Spread:
     """``disp`` with the unsure pixels' values replaced by their wide region's plane where
-    it holds, then bridged (float32, new arrays). ``right``: the view as matched (after any
-    exposure correction), ``colour_weight`` the colour term's weight it was matched with."""
+    it holds, then bridged, then refitted (float32, new arrays). ``right``: the view as
+    matched (after any exposure correction), ``colour_weight`` the colour term's weight it
+    was matched with."""
     s = cfg.surfaces
     arms = arms_grown_below(left, _wide_arms(cfg.arms, s, view_contrast(left)), s.levels)
     disp = np.ascontiguousarray(disp, dtype=np.float32)
@@ -101,6 +103,7 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
         out[settle] = plane[settle]
         confidence[agree] = np.maximum(confidence[agree], np.float32(s.refit_confidence))
     return Spread(np.clip(out, 0, max_disp, out=out), confidence)
+
 
 def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float) -> np.ndarray:
     """Per ``unsure`` pixel, the line between the nearest sure disparities (``sure``: NaN
