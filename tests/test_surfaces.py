@@ -180,3 +180,28 @@ def test_a_dark_views_wide_regions_grow_with_a_smaller_colour_threshold():
     assert _wide_arms(arms, cfg, 75.0).tau1 == pytest.approx(cfg.tau / 2)
     off = dataclasses.replace(cfg, contrast=None)
     assert _wide_arms(arms, off, 75.0).tau1 == cfg.tau
+
+
+def test_long_arms_carry_a_walls_plane_across_its_shading():
+    """A wall whose grey level falls slowly to the left (a lamp's light on it), sure only
+    on its right part (x >= 200). The wide regions' stricter threshold beyond arms.l1 stops
+    their arms on the shading: no plane reaches left of x = 115, and no bridge (nothing sure
+    on the left); with long_arms the regions reach the sure part and the wall's plane."""
+    height, width = 96, 320
+    x = np.arange(width, dtype=np.float32)
+    truth = np.tile(6.0 + 10.0 * x / width, (height, 1)).astype(np.float32)
+    left = np.tile(40.0 + 0.2 * x, (height, 1))
+    right = np.tile(40.0 + 0.2 * np.minimum(x + truth[0], width - 1), (height, 1))
+    left, right = (np.rint(v).astype(np.uint8) for v in (left, right))
+    disp = truth.copy()
+    confidence = np.full(disp.shape, 0.9, np.float32)
+    disp[:, :200], confidence[:, :200] = 2.0, 0.1
+    labels = np.full(disp.shape, VALID, np.uint8)
+    results = {long: spread_planes(disp, confidence, labels, left, right, 31,
+                                   _config(long_arms=long)).disparity
+               for long in (False, True)}
+    wall = (slice(None), slice(20, 100))
+    assert np.mean(np.abs(results[False][wall] - truth[wall]) <= 1.0) < 0.05
+    assert np.mean(np.abs(results[True][wall] - truth[wall]) <= 1.0) > 0.95
+    sure = confidence >= 0.3
+    assert np.array_equal(results[True][sure], disp[sure])

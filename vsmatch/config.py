@@ -237,7 +237,9 @@ class SurfacesConfig:
     least ``refit_share`` of the region; each fit on those within ``refit_inlier`` of the last),
     and every pixel that was unsure takes its region's plane where the region spreads at most
     ``max_spread`` about it; its confidence is raised to ``refit_confidence`` where the plane
-    lies within ``refit_agree`` of its disparity."""
+    lies within ``refit_agree`` of its disparity. With ``long_arms``, the pixels each of these
+    steps leaves unsure take the plane of longer-armed regions (one threshold ``tau`` along
+    the whole arm), the refit's as well."""
 
     enabled: bool = _param(False, doc="Planes across wide regions for unsure pixels.")
     levels: int = _param(3, 1, 5, doc="Pyramid levels down where the wide regions grow.")
@@ -288,6 +290,9 @@ class SurfacesConfig:
     refit_confidence: float = _param(0.0, 0.0, 1.0, doc=(
         "The confidence a pixel whose refitted plane agrees with its disparity is given at "
         "least (0: unchanged)."))
+    long_arms: bool = _param(False, doc=(
+        "For the unsure pixels no plane, bridge or refit filled: the planes of regions whose "
+        "arms keep tau along their whole length (not the stricter arms.tau3 beyond arms.l1)."))
 
 
 @dataclass(frozen=True)

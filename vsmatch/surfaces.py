@@ -21,6 +21,10 @@ board between them. With ``refit``, the regions' planes are fitted once more thr
 pixel now filled (sure, taken, bridged): a board's bridges err either way and average into
 the board's plane, which every pixel that was unsure then takes where the region holds
 close about it (a road or wall beyond the right view's edge, too, from its visible part).
+
+With ``long_arms``, what all this leaves unsure takes the plane of regions whose arms keep
+one colour threshold along their whole length: a wall whose shading changes by more than
+``arms.tau3`` within the reach of the regions above, sure only far from its blank part.
 """
 
 from __future__ import annotations
@@ -58,12 +62,17 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     matched (after any exposure correction), ``colour_weight`` the colour term's weight it
     was matched with."""
     s = cfg.surfaces
-    arms = arms_grown_below(left, _wide_arms(cfg.arms, s, view_contrast(left)), s.levels)
+    contrast = view_contrast(left)
+    arms = arms_grown_below(left, _wide_arms(cfg.arms, s, contrast), s.levels)
+    # Longer arms, for what the regions above leave: beyond arms.l1 their threshold is
+    # arms.tau3, stricter, and on a wall's shading they stop there (56 px at full size).
+    long_arms = (arms_grown_below(left, _wide_arms(cfg.arms, s, contrast, long=True), s.levels)
+                 if s.long_arms else None)
     disp = np.ascontiguousarray(disp, dtype=np.float32)
     sure = (labels == VALID) & np.isfinite(disp) & (confidence >= s.fit)
-    plane, spread = region_planes(disp, sure, arms, s.iterations, s.min_share, s.inlier)
-    with np.errstate(invalid="ignore"):
-        take = np.isfinite(plane) & (spread <= s.max_spread) & (confidence < s.take)
+    was_unsure = confidence < s.take
+    plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier)
+    take = close & was_unsure
     # The found disparities' window cost, computed once and only when a check needs it.
     found_cost = functools.cache(
         lambda: _window_cost(left, right, disp, max_disp, cfg, colour_weight))
@@ -78,7 +87,6 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     if take.any():
         take &= no_worse(np.where(take, plane, disp), s.tolerance)
         out[take] = plane[take]
-    was_unsure = confidence < s.take
     confidence = confidence.copy()
     across = np.zeros_like(take)
     if s.bridge > 0:
@@ -92,17 +100,37 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
             across &= no_worse(np.where(across, bridged, out), s.bridge_tolerance)
         out[across] = bridged[across]
         confidence[across] = np.maximum(confidence[across], np.float32(s.bridge_confidence))
+    if long_arms is not None:
+        # No cost check: these pixels are unsure because their costs tell little.
+        plane, close = _close_planes(disp, sure, long_arms, s, s.min_share, s.inlier)
+        late = close & was_unsure & ~take & ~across
+        out[late] = plane[late]
+        take |= late
     if s.refit:
-        plane, spread = region_planes(out, sure | take | across, arms, s.iterations,
-                                      s.refit_share, s.refit_inlier)
+        filled = sure | take | across
+        plane, close = _close_planes(out, filled, arms, s, s.refit_share, s.refit_inlier)
+        settle = was_unsure & close
         with np.errstate(invalid="ignore"):
-            settle = was_unsure & np.isfinite(plane) & (spread <= s.max_spread)
             # Two witnesses, the pixel's own disparity and its region's plane: where they
             # agree the pixel is more likely right than either alone.
             agree = settle & (np.abs(plane - out) <= s.refit_agree)
+        if long_arms is not None:
+            wider, wider_close = _close_planes(out, filled, long_arms, s, s.refit_share,
+                                               s.refit_inlier)
+            plane = np.where(close, plane, wider)
+            settle |= was_unsure & wider_close
         out[settle] = plane[settle]
         confidence[agree] = np.maximum(confidence[agree], np.float32(s.refit_confidence))
     return Spread(np.clip(out, 0, max_disp, out=out), confidence)
+
+
+def _close_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, s: SurfacesConfig,
+                  share: float, inlier: float) -> tuple[np.ndarray, np.ndarray]:
+    """Each pixel's region's plane through its ``kept`` pixels (``planes.region_planes``),
+    and where the region has one and spreads at most ``s.max_spread`` about it."""
+    plane, spread = region_planes(disp, kept, arms, s.iterations, share, inlier)
+    with np.errstate(invalid="ignore"):
+        return plane, np.isfinite(plane) & (spread <= s.max_spread)
 
 
 def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float) -> np.ndarray:
@@ -141,14 +169,16 @@ def view_contrast(view: np.ndarray) -> float:
     return float(high - low)
 
 
-def _wide_arms(arms: ArmsConfig, s: SurfacesConfig, contrast: float) -> ArmsConfig:
+def _wide_arms(arms: ArmsConfig, s: SurfacesConfig, contrast: float,
+               long: bool = False) -> ArmsConfig:
     """The arms config of the wide regions, its lengths in pixels of the reduced view; the
     colour threshold shrinks with a view's ``contrast`` below ``s.contrast``: a dark view's
-    surfaces differ by fewer grey levels, and a region would grow across them."""
+    surfaces differ by fewer grey levels, and a region would grow across them. ``long``:
+    the same threshold along the whole arm (``arms.tau3`` is stricter beyond ``arms.l1``)."""
     l2 = max(2, s.l2 >> s.levels)
     tau = s.tau if s.contrast is None else s.tau * min(1.0, contrast / s.contrast)
     return dataclasses.replace(arms, tau1=tau, tau2=tau, l2=l2, l1=min(arms.l1, l2 - 1),
-                               kappa=0.0, shrink=False)
+                               tau3=tau if long else arms.tau3, kappa=0.0, shrink=False)
 
 
 def _window_cost(left: np.ndarray, right: np.ndarray, disp: np.ndarray, max_disp: int,
