@@ -205,3 +205,19 @@ def test_long_arms_carry_a_walls_plane_across_its_shading():
     assert np.mean(np.abs(results[True][wall] - truth[wall]) <= 1.0) > 0.95
     sure = confidence >= 0.3
     assert np.array_equal(results[True][sure], disp[sure])
+
+
+def test_the_refit_raises_the_confidence_only_where_the_pixels_own_match_agrees(pair):
+    """Two unsure blocks of the background; the one whose match was wrong takes the plane
+    (first pass) and the refit then agrees with that plane, not with its match: its
+    confidence stays; the one whose match was right is raised to refit_confidence."""
+    disp, confidence, labels = _inputs(pair)
+    wrong, right = BLOCK, (slice(160, 200), BLOCK[1])
+    disp[wrong] = 2.0
+    confidence[wrong] = confidence[right] = 0.1
+    cfg = _config()
+    out = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp, cfg)
+    truth = pair.disparity
+    assert np.mean(np.abs(out.disparity[wrong] - truth[wrong]) <= 1.0) > 0.95  # taken
+    assert np.all(out.confidence[wrong] == np.float32(0.1))
+    assert np.mean(out.confidence[right] == np.float32(cfg.surfaces.refit_confidence)) > 0.95

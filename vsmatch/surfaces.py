@@ -107,13 +107,16 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
         out[late] = plane[late]
         take |= late
     if s.refit:
+        # A pixel's own witness: its match, or its bridge (from the matches above and
+        # below), not a plane taken from these same regions, which would agree with itself.
+        witness = np.where(across, out, disp)
         filled = sure | take | across
         plane, close = _close_planes(out, filled, arms, s, s.refit_share, s.refit_inlier)
         settle = was_unsure & close
         with np.errstate(invalid="ignore"):
-            # Two witnesses, the pixel's own disparity and its region's plane: where they
-            # agree the pixel is more likely right than either alone.
-            agree = settle & (np.abs(plane - out) <= s.refit_agree)
+            # Two witnesses, the pixel's own and its region's plane: where they agree the
+            # pixel is more likely right than either alone.
+            agree = settle & (np.abs(plane - witness) <= s.refit_agree)
         if long_arms is not None:
             wider, wider_close = _close_planes(out, filled, long_arms, s, s.refit_share,
                                                s.refit_inlier)
