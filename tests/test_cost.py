@@ -68,3 +68,10 @@ def test_presmooth_zero_is_identity(rng):
     grey = rng.random((8, 8), dtype=np.float32)
     assert sensitivity.presmooth(grey, 0.0) is grey
     assert not np.array_equal(sensitivity.presmooth(grey, 1.0), grey)
+
+
+def test_texture_is_eight_for_a_gradient_of_one_grey_level_a_pixel():
+    ramp = np.tile(np.arange(64, dtype=np.float32), (16, 1))
+    inside = sensitivity.texture(ramp)[4:-4, 4:-4]
+    assert np.allclose(inside, 8.0)
+    assert np.all(sensitivity.texture(np.full((16, 16), 77, np.float32)) == 0)

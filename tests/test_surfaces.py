@@ -221,3 +221,21 @@ def test_the_refit_raises_the_confidence_only_where_the_pixels_own_match_agrees(
     assert np.mean(np.abs(out.disparity[wrong] - truth[wrong]) <= 1.0) > 0.95  # taken
     assert np.all(out.confidence[wrong] == np.float32(0.1))
     assert np.mean(out.confidence[right] == np.float32(cfg.surfaces.refit_confidence)) > 0.95
+
+
+def test_a_sure_match_where_the_view_is_flat_counts_as_unsure(pair):
+    """A block of the left view without any texture, its inside matched surely but wrong
+    (its rim, next to the texture around it, is matched right): with surfaces.flat the
+    inside counts as unsure and takes the background's plane; without, a sure pixel keeps
+    its value."""
+    disp, confidence, labels = _inputs(pair)
+    left = pair.left.copy()
+    left[BLOCK] = 128
+    inside = (slice(BLOCK[0].start + 3, BLOCK[0].stop - 3),  # the 3 x 3 Sobel's 5 x 5
+              slice(BLOCK[1].start + 3, BLOCK[1].stop - 3))  # mean reaches 3 px in
+    disp[inside] = 2.0
+    results = {flat: spread_planes(disp, confidence, labels, left, pair.right, pair.max_disp,
+                                   _config(flat=flat)).disparity[inside]
+               for flat in (None, 1.0)}
+    assert np.all(results[None] == 2.0)
+    assert np.mean(np.abs(results[1.0] - pair.disparity[inside]) <= 1.0) > 0.95

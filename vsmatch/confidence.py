@@ -35,7 +35,7 @@ from ._kernels.confidence import cost_curve, logistic
 from .bands import Bands, of
 from .disparity import VALID, MISMATCHED
 from .images import grey_levels
-from .sensitivity import sobel
+from .sensitivity import texture
 from .tiles import row_blocks
 
 #: The features, in the order of the model's weights (a constant first).
@@ -117,9 +117,7 @@ def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
     row["valid"][:] = valid
     row["mismatched"][:] = False if labels is None else labels == MISMATCHED
     log1p_into(_distance_to(valid), row["fill_distance"])
-    gx, gy = sobel(grey_levels(left))
-    gradient = np.abs(gx) + np.abs(gy)
-    log1p_into(cv2.blur(gradient, (5, 5)), row["texture"])
+    log1p_into(texture(grey_levels(left)), row["texture"])
     finite = np.where(np.isfinite(disparity), disparity, 0).astype(np.float32)
     jumps = np.zeros(shape, bool)
     jumps[:, 1:] |= np.abs(np.diff(finite, axis=1)) > 1

@@ -237,7 +237,8 @@ class SurfacesConfig:
     least ``refit_share`` of the region; each fit on those within ``refit_inlier`` of the last),
     and every pixel that was unsure takes its region's plane where the region spreads at most
     ``max_spread`` about it; its confidence is raised to ``refit_confidence`` where the plane
-    lies within ``refit_agree`` of its disparity. With ``long_arms``, the pixels each of these
+    lies within ``refit_agree`` of its disparity. A pixel whose texture is below ``flat``
+    counts as unsure. With ``long_arms``, the pixels each of these
     steps leaves unsure take the plane of longer-armed regions (one threshold ``tau`` along
     the whole arm), the refit's as well."""
 
@@ -290,6 +291,10 @@ class SurfacesConfig:
     refit_confidence: float = _param(0.0, 0.0, 1.0, doc=(
         "The confidence a pixel whose refitted plane agrees with its disparity is given at "
         "least (0: unchanged)."))
+    flat: float | None = _param(None, 0.0, 255.0, nullable=True, doc=(
+        "A pixel whose texture (|gx| + |gy| of the Sobel over 5 x 5; 8 for one grey level "
+        "a pixel) is below this counts as unsure, whatever its confidence: with nothing to "
+        "see, its match is the colour term's guess. null: off."))
     long_arms: bool = _param(False, doc=(
         "For the unsure pixels no plane, bridge or refit filled: the planes of regions whose "
         "arms keep tau along their whole length (not the stricter arms.tau3 beyond arms.l1)."))

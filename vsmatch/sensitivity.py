@@ -28,6 +28,18 @@ def visual_sensitivity(grey: np.ndarray, direction: bool = True
     return np.sqrt(gx * gx + gy * gy), theta
 
 
+#: The square (pixels) :func:`texture` averages the gradient over.
+TEXTURE_WINDOW = 5
+
+
+def texture(grey: np.ndarray) -> np.ndarray:
+    """How much the image varies about each pixel: |gx| + |gy| of the Sobel derivatives,
+    averaged over a :data:`TEXTURE_WINDOW` square (float32; 8 for a gradient of one grey
+    level a pixel)."""
+    gx, gy = sobel(grey)
+    return cv2.blur(np.abs(gx) + np.abs(gy), (TEXTURE_WINDOW, TEXTURE_WINDOW))
+
+
 def sobel(grey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The 3 x 3 Sobel derivatives along x and y (float32; borders mirrored)."""
     gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT_101)

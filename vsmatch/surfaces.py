@@ -43,6 +43,7 @@ from .disparity import VALID
 from .images import grey_levels
 from .level import matching_costs
 from .planes import region_planes
+from .sensitivity import texture
 
 
 class Spread(NamedTuple):
@@ -69,8 +70,12 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     long_arms = (arms_grown_below(left, _wide_arms(cfg.arms, s, contrast, long=True), s.levels)
                  if s.long_arms else None)
     disp = np.ascontiguousarray(disp, dtype=np.float32)
-    sure = (labels == VALID) & np.isfinite(disp) & (confidence >= s.fit)
-    was_unsure = confidence < s.take
+    # Where the view has no texture at all the match saw nothing: whatever its confidence
+    # (the colour term can find a faint shading's brightness a few pixels off), unsure.
+    flat = (texture(grey_levels(left)) < s.flat if s.flat is not None
+            else np.zeros(disp.shape, bool))
+    sure = (labels == VALID) & np.isfinite(disp) & (confidence >= s.fit) & ~flat
+    was_unsure = (confidence < s.take) | flat
     plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier)
     take = close & was_unsure
     # The found disparities' window cost, computed once and only when a check needs it.
