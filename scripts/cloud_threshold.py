@@ -6,6 +6,7 @@ share of them whose depth is more than 3 % off the ground truth's (among those w
 truth), and how many there are against the scene's non-occluded pixels.
 
     python scripts/cloud_threshold.py [--data-root DIR] [--dataset middlebury2014-quarter]
+        [--config default]
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data-root", default=None)
     parser.add_argument("--dataset", default="middlebury2014-quarter")
+    parser.add_argument("--config", default="default")
     args = parser.parse_args()
     folder = datasets.dataset_folder(args.dataset, args.data_root)
     scenes = datasets.load_dataset(args.dataset, args.data_root)
@@ -33,7 +35,8 @@ def main() -> int:
     print(f"{'scene':<13}" + "".join(f"{'t=' + format(t, 'g'):>14}" for t in THRESHOLDS))
     for scene in scenes:
         calib = geometry.read_calibration(Path(folder) / scene.name / "calib.txt")
-        result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp)
+        result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp,
+                              config=args.config)
         depth = geometry.depth_from_disparity(result.disparity, calib)
         truth = geometry.depth_from_disparity(scene.ground_truth, calib)
         known = np.isfinite(truth)

@@ -104,6 +104,27 @@ def test_plane_values_recover_an_exact_plane():
     assert spread.max() < 0.05
 
 
+def test_region_sums_add_each_cross_region_in_blocks_of_columns():
+    """Every pixel's sum over the horizontal arms of the pixels on its vertical arm, against
+    the sums written out; a width that is not a whole number of column blocks."""
+    from vsmatch._kernels.planes import COLUMN_BLOCK, region_sums
+    from vsmatch.aggregation import keep_arms_inside
+
+    rng = np.random.default_rng(5)
+    h, w = 23, 2 * COLUMN_BLOCK + 5
+    src = rng.random((h, w, 3)).astype(np.float32)
+    arms = rng.integers(0, 6, (4, h, w)).astype(np.uint8)
+    keep_arms_inside(arms)
+    scratch, out = np.empty_like(src), np.empty_like(src)
+    region_sums(src, arms, scratch, out)
+    want = np.zeros_like(src, dtype=np.float64)
+    for y in range(h):
+        for x in range(w):
+            for yy in range(y - arms[2, y, x], y + arms[3, y, x] + 1):
+                want[y, x] += src[yy, x - arms[0, yy, x]:x + arms[1, yy, x] + 1].sum(axis=0)
+    np.testing.assert_allclose(out, want, rtol=1e-5, atol=1e-5)
+
+
 def test_arms_stop_at_steps_between_neighbours_disparities():
     disp = np.zeros((5, 12), np.float32)
     disp[:, 6:] = 5.0  # a depth edge between columns 5 and 6

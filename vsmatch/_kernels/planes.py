@@ -144,13 +144,33 @@ def _line_sums(values, lo_arms, hi_arms, out):
             out[i, k] = sums[hi, k] - sums[lo, k]
 
 
+#: Columns the column pass of :func:`region_sums` runs along at once: their running sums
+#: side by side in memory (a column alone of the (H, W, C) rows is read with a stride of a
+#: whole row). 16 was fastest of 8 to 64 (13.0 -> 8.5 ms on a 942 x 489 image, 11 channels).
+COLUMN_BLOCK = 16
+
+
 @njit(**KERNEL_OPTIONS)
 def region_sums(src, arms, scratch, out):
     """``out[y, x]`` = the sum of ``src`` (H, W, C) over pixel (y, x)'s cross region: the
     horizontal arms (left, right) of the pixels on its vertical arm (up, down). Each row,
-    then each column of the row sums (``scratch``)."""
-    height, width, _ = src.shape
+    then each column of the row sums (``scratch``), :data:`COLUMN_BLOCK` columns at a time,
+    each by running sums in float64 (the same sums, in the same order, as one at a time)."""
+    height, width, channels = src.shape
     for y in prange(height):
         _line_sums(src[y], arms[0, y], arms[1, y], scratch[y])
-    for x in prange(width):
-        _line_sums(scratch[:, x], arms[2, :, x], arms[3, :, x], out[:, x])
+    for block in prange((width + COLUMN_BLOCK - 1) // COLUMN_BLOCK):
+        x0 = block * COLUMN_BLOCK
+        n = min(width, x0 + COLUMN_BLOCK) - x0
+        sums = np.empty((height + 1, n, channels))
+        sums[0] = 0.0
+        for y in range(height):
+            for j in range(n):
+                for k in range(channels):
+                    sums[y + 1, j, k] = sums[y, j, k] + scratch[y, x0 + j, k]
+        for y in range(height):
+            for j in range(n):
+                lo = y - np.int64(arms[2, y, x0 + j])
+                hi = y + np.int64(arms[3, y, x0 + j]) + 1
+                for k in range(channels):
+                    out[y, x0 + j, k] = sums[hi, j, k] - sums[lo, j, k]
