@@ -3,10 +3,13 @@
 Each scene's two views are darkened, as an unlit scene or a short exposure records them:
 the grey levels scaled by ``--gain`` (the signal shrinks) and then each view given its own
 sensor noise of ``--sigma`` grey levels (the noise does not shrink with the light), rounded
-to 8 bits. The scene's headline figure (as ``vsmatch eval`` reports it) is printed beside the
-same config's figure on the views as they are, per dataset, for each config.
+to 8 bits. With ``--gamma`` the grey levels are first raised to that power (as fractions of
+255): an underexposed camera's shadows crushed towards black, its highlights kept
+(``--gain 1 --gamma 2.2 --sigma 1``). The scene's headline figure (as ``vsmatch eval``
+reports it) is printed beside the same config's figure on the views as they are, per
+dataset, for each config.
 
-    python scripts/dark_views.py CONFIG [CONFIG ...] [--gain 0.3] [--sigma 1.5]
+    python scripts/dark_views.py CONFIG [CONFIG ...] [--gain 0.3] [--sigma 1.5] [--gamma 1]
         [--datasets eth3d middlebury2014-quarter] [--data-root DIR] [--set section.key=value]
 """
 
@@ -21,16 +24,20 @@ from vsmatch import datasets, evaluation
 from vsmatch.config import with_changes
 
 
-def darkened(view: np.ndarray, gain: float, sigma: float, seed: int) -> np.ndarray:
-    """``view`` with its grey levels scaled by ``gain`` and its own sensor noise."""
+def darkened(view: np.ndarray, gain: float, sigma: float, seed: int,
+             gamma: float = 1.0) -> np.ndarray:
+    """``view`` with its grey levels raised to ``gamma`` (as fractions of 255), scaled by
+    ``gain``, and its own sensor noise."""
     noise = np.random.default_rng(seed).normal(0.0, sigma, view.shape)
-    return np.clip(np.rint(view * gain + noise), 0, 255).astype(np.uint8)
+    levels = view if gamma == 1.0 else 255.0 * (view / 255.0) ** gamma
+    return np.clip(np.rint(levels * gain + noise), 0, 255).astype(np.uint8)
 
 
-def dark_scene(scene: datasets.Scene, gain: float, sigma: float, seed: int) -> datasets.Scene:
+def dark_scene(scene: datasets.Scene, gain: float, sigma: float, seed: int,
+               gamma: float = 1.0) -> datasets.Scene:
     """``scene`` with both views darkened, each with its own noise (seeded by ``seed``)."""
-    return dataclasses.replace(scene, left=darkened(scene.left, gain, sigma, 2 * seed),
-                               right=darkened(scene.right, gain, sigma, 2 * seed + 1))
+    return dataclasses.replace(scene, left=darkened(scene.left, gain, sigma, 2 * seed, gamma),
+                               right=darkened(scene.right, gain, sigma, 2 * seed + 1, gamma))
 
 
 def main() -> None:
@@ -38,6 +45,7 @@ def main() -> None:
     parser.add_argument("configs", nargs="+")
     parser.add_argument("--gain", type=float, default=0.3)
     parser.add_argument("--sigma", type=float, default=1.5)
+    parser.add_argument("--gamma", type=float, default=1.0)
     parser.add_argument("--datasets", nargs="+", default=["eth3d", "middlebury2014-quarter"])
     parser.add_argument("--set", dest="changes", action="append", default=[],
                         metavar="section.key=value", help="applied to every config")
@@ -46,7 +54,8 @@ def main() -> None:
     methods = {name: with_changes(name, args.changes) for name in args.configs}
     for dataset in args.datasets:
         scenes = datasets.load_dataset(dataset, args.data_root)
-        dark = [dark_scene(s, args.gain, args.sigma, seed) for seed, s in enumerate(scenes)]
+        dark = [dark_scene(s, args.gain, args.sigma, seed, args.gamma)
+                for seed, s in enumerate(scenes)]
         for name, cfg in methods.items():
             as_is = evaluation.headline_figures(
                 evaluation.evaluate(scenes, {name: cfg}, dataset=dataset), name)
