@@ -239,3 +239,24 @@ def test_a_sure_match_where_the_view_is_flat_counts_as_unsure(pair):
                for flat in (None, 1.0)}
     assert np.all(results[None] == 2.0)
     assert np.mean(np.abs(results[1.0] - pair.disparity[inside]) <= 1.0) > 0.95
+
+
+def test_a_board_running_out_of_the_views_bottom_takes_the_level_disparity_above_it():
+    from vsmatch.surfaces import EDGE_LEVEL_ROWS, _bottom_edge_extension
+
+    height, width = 60, 4
+    sure = np.full((height, width), np.nan, np.float32)
+    sure[:40, 0] = 20.0  # a vertical face above the board: level
+    sure[:40, 1] = 20.0 + 0.2 * np.arange(40)  # a floor: rises 0.2 px a row
+    sure[:40, 2] = 20.0
+    sure[55, 2] = 25.0  # something sure below the gap: a bridge's business, not this
+    sure[:40, 3] = 20.0
+    unsure = np.zeros((height, width), bool)
+    unsure[40:, :] = True
+    out = _bottom_edge_extension(sure, unsure, reach=24)
+    assert np.all(out[40:, 0] == 20.0) and np.all(np.isnan(out[:40, 0]))
+    assert np.all(np.isnan(out[:, 1]))  # not level
+    assert np.all(np.isnan(out[40:55, 2]))  # a sure pixel below
+    assert np.all(np.isnan(_bottom_edge_extension(sure, unsure, reach=19)[:, 3]))  # too far
+    sure[39 - EDGE_LEVEL_ROWS, 3] = np.nan  # no sure pixel to tell the column is level
+    assert np.all(np.isnan(_bottom_edge_extension(sure, unsure, reach=24)[:, 3]))

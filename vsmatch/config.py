@@ -232,7 +232,9 @@ class SurfacesConfig:
     still unsure between two sure pixels at most ``bridge`` apart along its column (then its
     row) whose disparities agree within ``bridge_agree`` takes the line between them, unless
     that is more than ``bridge_behind`` below its own disparity, and where its window cost is at
-    most ``bridge_tolerance`` above the match's (when set). With ``refit``, the wide regions'
+    most ``bridge_tolerance`` above the match's (when set); one with nothing sure below it down
+    to the view's bottom edge, at most ``bridge_edge`` rows away, takes the sure disparity
+    above it where its column is level. With ``refit``, the wide regions'
     planes are then fitted again through the sure, taken and bridged pixels (where these are at
     least ``refit_share`` of the region; each fit on those within ``refit_inlier`` of the last),
     and every pixel that was unsure takes its region's plane where the region spreads at most
@@ -267,6 +269,10 @@ class SurfacesConfig:
     bridge: int = _param(0, 0, 1024, doc=(
         "Longest gap (pixels) along a column or row between two sure pixels that an "
         "unsure pixel between them takes the line of (a shelf's board, a wall); 0: off."))
+    bridge_edge: int = _param(0, 0, 1024, doc=(
+        "An unsure pixel with no sure pixel below it down to the view's bottom edge, at most "
+        "this many rows above the edge, takes the nearest sure disparity above it where "
+        "the column is level there (a board running out of the view); 0: off."))
     bridge_agree: float = _param(2.0, 0.0, 100.0, doc=(
         "Most the two ends of a bridge may differ (pixels)."))
     bridge_behind: float = _param(8.0, 0.0, 1024.0, doc=(

@@ -96,7 +96,11 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     across = np.zeros_like(take)
     if s.bridge > 0:
         unsure = was_unsure & ~take
-        bridged = _bridges(np.where(sure, disp, np.nan), unsure, s.bridge, s.bridge_agree)
+        sure_disp = np.where(sure, disp, np.nan)
+        bridged = _bridges(sure_disp, unsure, s.bridge, s.bridge_agree)
+        if s.bridge_edge > 0:
+            edge = _bottom_edge_extension(sure_disp, unsure, s.bridge_edge)
+            bridged = np.where(np.isfinite(bridged), bridged, edge)
         # Never far behind the pixel's own match: a thin object in front of one surface (an
         # armrest before a chair's back) is no gap in it.
         with np.errstate(invalid="ignore"):
@@ -168,6 +172,34 @@ def _column_bridges(sure: np.ndarray, unsure: np.ndarray, span: int,
         ends &= np.abs(top - bottom) <= agree
         share = (rows - above) / np.maximum(below - above, 1)
         return np.where(ends, top + share * (bottom - top), np.nan).astype(np.float32)
+
+
+#: The column's sure disparities :func:`_bottom_edge_extension` compares: the nearest one
+#: above the gap and the one EDGE_LEVEL_ROWS above it, which must differ by at most
+#: EDGE_LEVEL_SLOPE px a row (a vertical face; a floor or a table top rises faster).
+EDGE_LEVEL_ROWS, EDGE_LEVEL_SLOPE = 16, 0.05
+
+
+def _bottom_edge_extension(sure: np.ndarray, unsure: np.ndarray, reach: int) -> np.ndarray:
+    """Per ``unsure`` pixel with no sure pixel (``sure``: NaN elsewhere) below it in its
+    column, down to the view's bottom edge, the disparity of the nearest sure pixel above,
+    where that is at most ``reach`` rows above the edge and the column is level there
+    (:data:`EDGE_LEVEL_ROWS`, :data:`EDGE_LEVEL_SLOPE`); NaN elsewhere. A face that runs out
+    of the view (a shelf's board) has only one side to bridge from."""
+    height, width = sure.shape
+    known = np.isfinite(sure)
+    # Whether a sure pixel lies at or below each pixel of its column.
+    sure_below = np.flip(np.logical_or.accumulate(np.flip(known, 0), axis=0), 0)
+    # The last sure row of each column (-1: none), and the one EDGE_LEVEL_ROWS above it.
+    anchor = np.where(known.any(axis=0), height - 1 - np.argmax(known[::-1], axis=0), -1)
+    columns = np.arange(width)
+    bottom = sure[np.maximum(anchor, 0), columns]
+    top = sure[np.maximum(anchor - EDGE_LEVEL_ROWS, 0), columns]
+    with np.errstate(invalid="ignore"):
+        level = (anchor >= EDGE_LEVEL_ROWS) & (
+            np.abs(bottom - top) <= EDGE_LEVEL_SLOPE * EDGE_LEVEL_ROWS)
+    ends = unsure & ~sure_below & (level & (height - anchor <= reach))[None, :]
+    return np.where(ends, bottom[None, :], np.nan).astype(np.float32)
 
 
 def view_contrast(view: np.ndarray) -> float:
