@@ -202,3 +202,16 @@ def test_default_cloud_threshold_keeps_mostly_right_points(data_dir):
         wrong.append(np.mean(np.abs(depth[checked] - truth[checked]) > 0.03 * truth[checked]))
         kept.append(np.isfinite(depth).sum() / scene.masks["nonocc"].sum())
     assert np.mean(wrong) <= 0.032 and np.mean(kept) >= 0.70
+
+
+def test_a_pixel_without_texture_stays_out_of_the_cloud():
+    from vsmatch.sensitivity import texture
+
+    view = np.full((20, 40), 200, np.float32)
+    view[:, 20:] += np.arange(20, dtype=np.float32)[None, :] * 3  # a ramp: texture 24
+    feature = np.log1p(texture(view)).astype(np.float32)
+    conf = np.full(view.shape, 0.99, np.float32)
+    confidence.cap_textureless(conf, feature)
+    assert np.all(conf[:, :15] == np.float32(confidence.TEXTURELESS_CONFIDENCE))
+    assert confidence.TEXTURELESS_CONFIDENCE < confidence.DEFAULT_MIN_CONFIDENCE
+    assert np.all(conf[:, 25:35] == np.float32(0.99))
