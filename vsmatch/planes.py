@@ -82,13 +82,15 @@ def region_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, iteratio
     last plane."""
     weight = kept.astype(np.float32)
     moments = np.empty(disp.shape + (N_MOMENTS,), np.float32)
-    scratch, sums = np.empty_like(moments), np.empty_like(moments)
+    scratch = np.empty_like(moments)
     plane = np.empty(disp.shape, np.float32)
     spread = np.empty(disp.shape, np.float32)
     for _ in range(iterations):
         plane_moments(disp, weight, moments)
-        region_sums(moments, arms, scratch, sums)
-        plane_values(sums, np.float32(min_share), np.float32(MIN_SPREAD), plane, spread)
+        # The region sums go back into the moments' array (44 bytes a pixel less): its
+        # rows are all read into the row sums before the column pass writes a sum.
+        region_sums(moments, arms, scratch, moments)
+        plane_values(moments, np.float32(min_share), np.float32(MIN_SPREAD), plane, spread)
         with np.errstate(invalid="ignore"):
             weight = (kept & (np.abs(disp - plane) <= inlier)).astype(np.float32)
     return plane, spread

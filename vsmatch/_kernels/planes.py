@@ -155,7 +155,8 @@ def region_sums(src, arms, scratch, out):
     """``out[y, x]`` = the sum of ``src`` (H, W, C) over pixel (y, x)'s cross region: the
     horizontal arms (left, right) of the pixels on its vertical arm (up, down). Each row,
     then each column of the row sums (``scratch``), :data:`COLUMN_BLOCK` columns at a time,
-    each by running sums in float64 (the same sums, in the same order, as one at a time)."""
+    each by running sums in float64 (the same sums, in the same order, as one at a time).
+    ``out`` may be ``src``: every row is summed into ``scratch`` before a sum is written."""
     height, width, channels = src.shape
     for y in prange(height):
         _line_sums(src[y], arms[0, y], arms[1, y], scratch[y])
