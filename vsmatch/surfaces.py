@@ -58,10 +58,11 @@ class Spread(NamedTuple):
 def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
                   left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
                   colour_weight: float = 1.0) -> Spread:
-    """``disp`` with the unsure pixels' values replaced by their wide region's plane where
-    it holds, then bridged, then refitted (float32, new arrays). ``right``: the view as
-    matched (after any exposure correction), ``colour_weight`` the colour term's weight it
-    was matched with."""
+    """``disp`` with the unsure pixels' values (and, with ``surfaces.flat``, those without
+    texture) replaced by their wide region's plane where it holds, then bridged, then given
+    the long-armed regions' plane, then refitted (float32, new arrays). ``right``: the view
+    as matched (after any exposure correction), ``colour_weight`` the colour term's weight
+    it was matched with."""
     s = cfg.surfaces
     contrast = view_contrast(left)
     arms = arms_grown_below(left, _wide_arms(cfg.arms, s, contrast), s.levels)
@@ -96,11 +97,8 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     across = np.zeros_like(take)
     if s.bridge > 0:
         unsure = was_unsure & ~take
-        sure_disp = np.where(sure, disp, np.nan)
-        bridged = _bridges(sure_disp, unsure, s.bridge, s.bridge_agree)
-        if s.bridge_edge > 0:
-            edge = _bottom_edge_extension(sure_disp, unsure, s.bridge_edge)
-            bridged = np.where(np.isfinite(bridged), bridged, edge)
+        bridged = _bridges(np.where(sure, disp, np.nan), unsure, s.bridge, s.bridge_agree,
+                           s.bridge_edge)
         # Never far behind the pixel's own match: a thin object in front of one surface (an
         # armrest before a chair's back) is no gap in it.
         with np.errstate(invalid="ignore"):
@@ -145,14 +143,19 @@ def _close_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, s: Surfa
         return plane, np.isfinite(plane) & (spread <= s.max_spread)
 
 
-def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float) -> np.ndarray:
+def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float,
+             edge: int = 0) -> np.ndarray:
     """Per ``unsure`` pixel, the line between the nearest sure disparities (``sure``: NaN
     elsewhere) above and below it in its column, where they are at most ``span`` rows
-    apart and differ by at most ``agree``; failing that, the same along its row (NaN where
-    neither holds)."""
+    apart and differ by at most ``agree``; failing that, the same along its row; failing
+    that, with ``edge`` > 0, :func:`_bottom_edge_extension` (NaN where none holds)."""
     bridged = _column_bridges(sure, unsure, span, agree)
     along_rows = _column_bridges(sure.T, unsure.T, span, agree).T
-    return np.where(np.isfinite(bridged), bridged, along_rows)
+    bridged = np.where(np.isfinite(bridged), bridged, along_rows)
+    if edge > 0:
+        bridged = np.where(np.isfinite(bridged), bridged,
+                           _bottom_edge_extension(sure, unsure, edge))
+    return bridged
 
 
 def _column_bridges(sure: np.ndarray, unsure: np.ndarray, span: int,
