@@ -210,8 +210,7 @@ def cap_range_ends(confidence: np.ndarray, disparity: np.ndarray, n_disp: int) -
     of 0 or of ``n_disp - 1``, the ends of the range searched (0-based)."""
     with np.errstate(invalid="ignore"):
         ends = (disparity < 0.5) | (disparity > n_disp - 1.5)
-    np.minimum(confidence, np.where(ends, RANGE_END_CONFIDENCE, 1.0).astype(np.float32),
-               out=confidence)
+    _cap(confidence, ends, RANGE_END_CONFIDENCE)
 
 
 #: A blob of one value: every disparity of the BLOB_WINDOW square within BLOB_SPREAD px of
@@ -231,8 +230,7 @@ def cap_flat_blobs(confidence: np.ndarray, disparity: np.ndarray,
     high = cv2.dilate(np.where(finite, disparity, -1e9).astype(np.float32), kernel)
     low = cv2.erode(np.where(finite, disparity, 1e9).astype(np.float32), kernel)
     blob = (high - low <= BLOB_SPREAD) & (texture < BLOB_TEXTURE)
-    np.minimum(confidence, np.where(blob, RANGE_END_CONFIDENCE, 1.0).astype(np.float32),
-               out=confidence)
+    _cap(confidence, blob, RANGE_END_CONFIDENCE)
 
 
 #: A pixel without texture (the texture feature below log(1 + NO_TEXTURE): under an eighth
@@ -248,9 +246,12 @@ NO_TEXTURE, TEXTURELESS_CONFIDENCE = 1.0, 0.9
 def cap_textureless(confidence: np.ndarray, texture: np.ndarray) -> None:
     """Cap, in place, the confidence of pixels without texture (``texture``: the feature)
     at :data:`TEXTURELESS_CONFIDENCE`."""
-    flat = texture < np.float32(np.log1p(NO_TEXTURE))
-    np.minimum(confidence, np.where(flat, np.float32(TEXTURELESS_CONFIDENCE), np.float32(1.0)),
-               out=confidence)
+    _cap(confidence, texture < np.float32(np.log1p(NO_TEXTURE)), TEXTURELESS_CONFIDENCE)
+
+
+def _cap(confidence: np.ndarray, where: np.ndarray, value: float) -> None:
+    """``confidence`` at most ``value`` where ``where`` holds, in place."""
+    np.minimum(confidence, np.float32(value), out=confidence, where=where)
 
 
 def matchability(margin: np.ndarray, raw_margin: np.ndarray) -> np.ndarray:

@@ -234,15 +234,15 @@ class SurfacesConfig:
     that is more than ``bridge_behind`` below its own disparity, and where its window cost is at
     most ``bridge_tolerance`` above the match's (when set); one with nothing sure below it down
     to the view's bottom edge, at most ``bridge_edge`` rows away, takes the sure disparity
-    above it where its column is level. With ``refit``, the wide regions'
-    planes are then fitted again through the sure, taken and bridged pixels (where these are at
-    least ``refit_share`` of the region; each fit on those within ``refit_inlier`` of the last),
-    and every pixel that was unsure takes its region's plane where the region spreads at most
+    above it where its column is level. With ``refit``, the wide regions' planes are then
+    fitted again through the sure, taken and bridged pixels (where these are at least
+    ``refit_share`` of the region; each fit on those within ``refit_inlier`` of the last), and
+    every pixel that was unsure takes its region's plane where the region spreads at most
     ``max_spread`` about it; its confidence is raised to ``refit_confidence`` where the plane
-    lies within ``refit_agree`` of its disparity. A pixel whose texture is below ``flat``
-    counts as unsure. With ``long_arms``, the pixels each of these
-    steps leaves unsure take the plane of longer-armed regions (one threshold ``tau`` along
-    the whole arm), the refit's as well."""
+    lies within ``refit_agree`` of its own match or bridge. A pixel whose texture is below
+    ``flat`` counts as unsure. With ``long_arms``, what the planes and bridges leave unsure,
+    and what the refit leaves, take the plane of longer-armed regions (one threshold ``tau``
+    along the whole arm)."""
 
     enabled: bool = _param(False, doc="Planes across wide regions for unsure pixels.")
     levels: int = _param(3, 1, 5, doc="Pyramid levels down where the wide regions grow.")
@@ -292,8 +292,8 @@ class SurfacesConfig:
     refit_inlier: float = _param(2.0, 0.0, 100.0, doc=(
         "Distance (pixels) to the refitted plane of the pixels the next refit uses."))
     refit_agree: float = _param(1.0, 0.0, 100.0, doc=(
-        "A pixel given its refitted plane within this (pixels) of its own disparity is "
-        "raised to refit_confidence."))
+        "A pixel given its refitted plane within this (pixels) of its own match (or its "
+        "bridge) is raised to refit_confidence."))
     refit_confidence: float = _param(0.0, 0.0, 1.0, doc=(
         "The confidence a pixel whose refitted plane agrees with its disparity is given at "
         "least (0: unchanged)."))
