@@ -18,7 +18,7 @@ import numpy as np
 
 from vsmatch import datasets, geometry, pipeline
 
-THRESHOLDS = (0.0, 0.5, 0.7, 0.8, 0.85, 0.9, 0.95, 0.98)
+THRESHOLDS = (0.0, 0.5, 0.8, 0.9, 0.92, 0.95, 0.98)
 DEPTH_TOLERANCE = 0.03
 
 

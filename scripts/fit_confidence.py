@@ -3,14 +3,16 @@
 For each scene of each dataset under the data root: vsmatch (``--config``, default
 ``default``) over the official range, the confidence features of every pixel, and
 whether its disparity is right by the dataset's measure (bad 1.0 on middlebury2 and the
-2005/2006 sets, bad 2.0 on Middlebury 2014, D1 on KITTI). A logistic model is fitted on
-the non-occluded pixels with ground truth, each dataset weighing the same and each scene
-the same within it; the shipped confidence is that model times the matchability gate
-(vsmatch.confidence.matchability), which pairs with nothing to match (flat grey, unrelated
-noise, two different scenes) are measured against. Printed per dataset: Hu and Mordohai's r
-(0 = a perfect ordering, about 1 = chance) of the fitted model, of the model fitted without
-that dataset (held out), of the left-right label alone, of the cost-curve margin alone, and
-of SGBM's kept/invalid mask (uniqueness 10, disp12MaxDiff 1) on its own disparity.
+2005/2006 sets, bad 2.0 on Middlebury 2014, D1 on KITTI). A logistic model of the features
+and their products (vsmatch.confidence.term_names) is fitted on every pixel with ground
+truth, occluded ones too, each dataset weighing the same and each scene the same within it
+(r is measured on the non-occluded pixels); the shipped confidence is that model times the
+matchability gate (vsmatch.confidence.matchability), which pairs with nothing to match
+(flat grey, unrelated noise, two different scenes) are measured against. Printed per
+dataset: Hu and Mordohai's r (0 = a perfect ordering, about 1 = chance) of the fitted model,
+of the model fitted without that dataset (held out), of the left-right label alone, of the
+cost-curve margin alone, and of SGBM's kept/invalid mask (uniqueness 10, disp12MaxDiff 1)
+on its own disparity.
 
     python scripts/fit_confidence.py [--data-root DIR] [--write]
 
@@ -92,11 +94,15 @@ def collect(data_root, config, grey=True):
                                                  result.curve)
             evaluated = evaluation.headline_mask(scene) & np.isfinite(scene.ground_truth)
             correct = ~scoring.bad_map(result.disparity, scene.ground_truth)
-            usable = evaluated & ~confidence.out_of_view(result.disparity)
+            # Fitted on every pixel with ground truth, occluded ones too: --cloud writes
+            # them all (r on the non-occluded pixels is better so too).
+            known = (scene.masks["all"] & np.isfinite(scene.ground_truth)
+                     & ~confidence.out_of_view(result.disparity))
             sgbm_disp, kept = sgbm_mask(scene)
             sgbm_correct = ~scoring.bad_map(sgbm_disp, scene.ground_truth)
             rows.append(dict(name=scene.name, features=features, correct=correct,
-                             evaluated=evaluated, usable=usable, disparity=result.disparity,
+                             evaluated=evaluated, known=known,
+                             disparity=result.disparity,
                              labels=result.labels, sgbm=(kept, sgbm_correct)))
             print(f"  {name}/{scene.name}", flush=True)
         out[name] = rows
@@ -138,9 +144,15 @@ def collect_negatives(data_root, config, rng):
         shape = left.shape[:2]
         rows.append(dict(name=name, features=features, correct=np.zeros(shape, bool),
                          evaluated=np.ones(shape, bool),
-                         usable=~confidence.out_of_view(result.disparity),
+                         known=~confidence.out_of_view(result.disparity),
                          disparity=result.disparity, labels=result.labels))
     return rows
+
+
+def model_terms(features: np.ndarray) -> np.ndarray:
+    """Each sample's model terms (confidence.term_names) from its features ``(N, F)``."""
+    cells = confidence.term_cells()
+    return np.stack([features[:, i] * features[:, j] for i, j in cells], axis=1)
 
 
 def training_set(data, names, rng):
@@ -148,11 +160,11 @@ def training_set(data, names, rng):
     for name in names:
         scenes = data[name]
         for scene in scenes:
-            idx = np.flatnonzero(scene["usable"])
+            idx = np.flatnonzero(scene["known"])
             if idx.size > SAMPLES:
                 idx = rng.choice(idx, SAMPLES, replace=False)
             features = scene["features"].reshape(len(confidence.FEATURES), -1)[:, idx].T
-            xs.append(features)
+            xs.append(model_terms(features))
             ys.append(scene["correct"].ravel()[idx])
             ws.append(np.full(idx.size, 1.0 / (idx.size * len(scenes) * len(names))))
     return np.concatenate(xs), np.concatenate(ys).astype(np.float64), np.concatenate(ws)
@@ -184,7 +196,7 @@ def main() -> int:
 
     def model(weights):
         return lambda s: confidence.combine(s["features"], s["disparity"],
-                                            weights.astype(np.float32))
+                                            confidence.weights_matrix(weights))
 
     print(f"\n{'dataset':<24}{'model':>8}{'held out':>10}{'LR label':>10}{'margin':>8}"
           f"{'SGBM mask':>11}   (r; AUC / optimum / dense error of the model)")
@@ -203,13 +215,13 @@ def main() -> int:
     print(f"pairs with nothing to match: mean confidence {np.mean(negatives):.3f} "
           f"(largest {max(negatives):.3f}, "
           f"{data[NEGATIVES][int(np.argmax(negatives))]['name']})")
-    weights = {k: round(float(v), 5) for k, v in zip(confidence.FEATURES, beta)}
-    print("\nweights:", json.dumps(weights))
+    terms = {k: round(float(v), 5) for k, v in zip(confidence.term_names(), beta)}
+    print("\nterms:", json.dumps(terms))
     if args.write:
         WEIGHTS_FILE.write_text(json.dumps({
             "note": "fitted by scripts/fit_confidence.py on " + ", ".join(names)
                     + f" with config '{args.config}'",
-            "weights": weights}, indent=2) + "\n")
+            "terms": terms}, indent=2) + "\n")
         print(f"wrote {WEIGHTS_FILE}")
     return 0
 

@@ -3,7 +3,7 @@
 A desk (its near top seen at a slant), a white wall behind a ukulele (a raw rig, rectified
 first) and a road (a KITTI 2015 frame): the left view, OpenCV SGBM's disparity (HH, holes
 black), vsmatch's (default config) on the same colour scale (its bar on the right), and
-vsmatch's confidence (white = 1; what the cloud keeps, >= 0.95, outlined in green).
+vsmatch's confidence (white = 1; what the cloud keeps, >= 0.92, outlined in green).
 
     python scripts/real_scenes_figure.py [--data-root DIR] [--out docs/real_scenes.jpg]
 """
@@ -16,7 +16,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vsmatch import datasets, pipeline, preview, rig
+import vsmatch
+from vsmatch import datasets, preview, rig
 from vsmatch.confidence import DEFAULT_MIN_CONFIDENCE, keep_confident
 from vsmatch.peers import sgbm_matcher
 
@@ -56,7 +57,7 @@ def main() -> int:
     root = datasets.dataset_folder("middlebury2", args.data_root).parent
     rows = []
     for name, left, right, max_disp in pairs(root):
-        result = pipeline.run(left, right, max_disp=max_disp)
+        result = vsmatch.run(left, right, max_disp=max_disp)
         low, high = result.search_range
         # Pixels whose match would lie outside the right view black, as SGBM leaves them.
         shown = keep_confident(result.disparity, result.confidence, 0.0)

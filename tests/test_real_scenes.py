@@ -253,7 +253,7 @@ def real_pair(root, name):
 
 def test_a_white_wall_stays_in_the_room(data_dir):
     """The ukulele rig: the wall is 1.4 m away, nothing farther than about 2 m. The cloud
-    (confidence >= 0.95) keeps its points in the room (18 % beyond 2.2 m before)."""
+    (the default confidence threshold) keeps its points in the room (18 % beyond 2.2 m before)."""
     from vsmatch import geometry
 
     left, right, camera = real_pair(data_dir, "ukulele-raw")

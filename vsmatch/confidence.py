@@ -13,8 +13,9 @@ What the method already knows, per pixel (:func:`pixel_features`):
 - how far inside the right view the match lies; out of view (no right pixel at its
   disparity, x - d < 0) gives confidence 0.
 
-A logistic model combines them, gated by how clearly the neighbourhood matched at all
-(:func:`matchability`); its weights are fitted on the developers' data, all datasets
+A logistic model of the features and their products two by two (a margin counts for more
+where the check passed) combines them, gated by how clearly the neighbourhood matched at
+all (:func:`matchability`); its weights are fitted on the developers' data, all datasets
 together (``python scripts/fit_confidence.py`` re-fits them and writes
 ``vsmatch/confidence_weights.json``). The confidence never changes the disparity.
 
@@ -58,10 +59,11 @@ CURVE_FLOOR = 0.5
 GATE_WINDOW, GATE_FROM, GATE_TO = 15, 0.12, 0.2
 RAW_GATE_FROM, RAW_GATE_TO = 0.003, 0.01
 #: The confidence below which --depth and --cloud leave a pixel out by default. Measured
-#: on the 8 Middlebury 2014 quarter-size scenes (scripts/cloud_threshold.py): of the
-#: points written, 2.9 % are more than 3 % off in depth, and 72 % as many points are
-#: written as the scenes have non-occluded pixels (every pixel: 14.3 %, 119 %).
-DEFAULT_MIN_CONFIDENCE = 0.95
+#: on the 9 Middlebury 2014 quarter-size scenes (scripts/cloud_threshold.py, default): of
+#: the points written, 2.9 % are more than 3 % off in depth, and 72 % as many points are
+#: written as the scenes have non-occluded pixels (every pixel: 15.5 %, 118 %; at 0.95
+#: 2.2 %, 66 %). Above 0.9, the most a pixel without texture or a refit keeps.
+DEFAULT_MIN_CONFIDENCE = 0.92
 #: Distances (pixels) beyond which the fill and jump distances count the same.
 MAX_DISTANCE = 16.0
 #: The densities of the sparsification curve: 5 %, 10 %, ... 100 %.
@@ -174,17 +176,48 @@ def _distance_to(mask: np.ndarray) -> np.ndarray:
     return np.minimum(distance, MAX_DISTANCE).astype(np.float32)
 
 
+def term_names() -> list[str]:
+    """The model's terms, in the order :func:`model_weights` reads them: each feature
+    (``bias`` alone is the constant), then each product ``a*b`` of two features (a before
+    b in :data:`FEATURES`, a feature with itself too): a margin counts for more where
+    the check passed, a texture for less near a jump."""
+    names = list(FEATURES[1:])
+    pairs = [f"{a}*{b}" for i, a in enumerate(names) for b in names[i:]]
+    return [FEATURES[0], *names, *pairs]
+
+
+def term_cells() -> list[tuple[int, int]]:
+    """Each of :func:`term_names`' cells (i, j), i <= j, in the quadratic form over
+    :data:`FEATURES` (whose first is the constant 1)."""
+    n = len(FEATURES)
+    return ([(0, 0)] + [(0, k) for k in range(1, n)]
+            + [(i, j) for i in range(1, n) for j in range(i, n)])
+
+
 @lru_cache(maxsize=None)
 def model_weights() -> np.ndarray:
-    """The fitted weights, one per :data:`FEATURES` entry."""
+    """The fitted model as the upper-triangular matrix of its quadratic form over
+    :data:`FEATURES` (float32, ``(n, n)``), from the named terms of
+    ``confidence_weights.json`` (:func:`term_names`)."""
     text = (resources.files("vsmatch") / "confidence_weights.json").read_text()
-    stored = json.loads(text)
-    return np.array([stored["weights"][name] for name in FEATURES], dtype=np.float32)
+    stored = json.loads(text)["terms"]
+    return weights_matrix([stored[name] for name in term_names()])
+
+
+def weights_matrix(values) -> np.ndarray:
+    """The quadratic form's matrix of the terms' ``values`` (in :func:`term_names`'
+    order)."""
+    n = len(FEATURES)
+    matrix = np.zeros((n, n), np.float32)
+    for (i, j), value in zip(term_cells(), values, strict=True):
+        matrix[i, j] = value
+    return matrix
 
 
 def combine(features: np.ndarray, disparity: np.ndarray,
             weights: np.ndarray | None = None) -> np.ndarray:
-    """Confidence in [0, 1] (float32): the logistic model over ``features``, times the
+    """Confidence in [0, 1] (float32): the logistic model over ``features`` (``weights``:
+    the matrix of its quadratic form, default :func:`model_weights`), times the
     :func:`matchability` of the pixel's neighbourhood; 0 where the disparity is invalid
     or points out of the right view (x - d < 0)."""
     weights = model_weights() if weights is None else weights

@@ -393,7 +393,7 @@ class TemporalConfig:
         "Pixels a changed region may have moved: its band holds the last disparities this "
         "far around."))
     band: int = _param(1, 0, 64, doc="Disparities added on each side of a band.")
-    unsure: float = _param(0.5, 0.0, 1.0, doc=(
+    unsure: float = _param(0.3, 0.0, 1.0, doc=(
         "Below this confidence the last estimate counts as unsure: searched again (around "
         "itself) even where the image held still."))
     max_band: int = _param(12, 3, 4096, doc="Most candidates a pixel keeps.")
