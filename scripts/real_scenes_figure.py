@@ -2,8 +2,9 @@
 
 A desk (its near top seen at a slant), a white wall behind a ukulele (a raw rig, rectified
 first) and a road (a KITTI 2015 frame): the left view, OpenCV SGBM's disparity (HH, holes
-black), vsmatch's (default config) on the same colour scale (its bar on the right), and
-vsmatch's confidence (white = 1; what the cloud keeps, >= 0.92, outlined in green).
+black), vsmatch's (default config) and vsmatch accurate's on the same colour scale (its bar
+on the right), and vsmatch's confidence (default; white = 1; what the cloud keeps, >= 0.92,
+outlined in green).
 
     python scripts/real_scenes_figure.py [--data-root DIR] [--out docs/real_scenes.jpg]
 """
@@ -49,6 +50,16 @@ def tile(image: np.ndarray, label: str) -> np.ndarray:
     return out
 
 
+def on_scale(disparity: np.ndarray, span: tuple[float, float]) -> np.ndarray:
+    """``disparity`` coloured over ``span`` as the preview's bar is; NaN and inf black."""
+    finite = np.isfinite(disparity)
+    scaled = np.clip((np.where(finite, disparity, span[0]) - span[0])
+                     * (255.0 / (span[1] - span[0])), 0, 255)
+    picture = cv2.applyColorMap(scaled.astype(np.uint8), cv2.COLORMAP_TURBO)
+    picture[~finite] = 0
+    return picture
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data-root", default=None)
@@ -66,11 +77,10 @@ def main() -> int:
         # SGBM on the same range and the same colours (its holes black).
         raw = sgbm_matcher(high, 3, min_disp=low).compute(left, right).astype(np.float32)
         theirs = np.where(raw >= 16 * low, raw / 16.0, np.nan).astype(np.float32)
-        span = preview.colour_range(result.disparity, result.confidence >=
-                                    DEFAULT_MIN_CONFIDENCE)
-        scaled = np.clip((theirs - span[0]) * (255.0 / (span[1] - span[0])), 0, 255)
-        sgbm = cv2.applyColorMap(np.nan_to_num(scaled).astype(np.uint8), cv2.COLORMAP_TURBO)
-        sgbm[~np.isfinite(theirs)] = 0
+        span = preview.colour_range(shown, np.isfinite(shown))  # the bar's
+        sgbm = on_scale(theirs, span)
+        accurate = vsmatch.run(left, right, max_disp=high, min_disp=low, config="accurate")
+        accurate = on_scale(keep_confident(accurate.disparity, accurate.confidence, 0.0), span)
         bar = ours[:, width:]
         conf = cv2.cvtColor((255 * result.confidence).astype(np.uint8), cv2.COLOR_GRAY2BGR)
         kept = (result.confidence >= DEFAULT_MIN_CONFIDENCE).astype(np.uint8)
@@ -78,6 +88,7 @@ def main() -> int:
         conf[edges > 0] = (0, 200, 0)
         rows.append(np.hstack([tile(left, name), tile(sgbm, "OpenCV SGBM"),
                                tile(ours[:, :width], "vsmatch default"),
+                               tile(accurate, "vsmatch accurate"),
                                tile(conf, "confidence"),
                                cv2.resize(bar, (bar.shape[1], round(left.shape[0] *
                                                                     TILE_WIDTH / width)))]))

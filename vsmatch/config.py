@@ -242,7 +242,11 @@ class SurfacesConfig:
     lies within ``refit_agree`` of its own match or bridge. A pixel whose texture is below
     ``flat`` counts as unsure. With ``long_arms``, what the planes and bridges leave unsure,
     and what the refit leaves, take the plane of longer-armed regions (one threshold ``tau``
-    along the whole arm)."""
+    along the whole arm). With ``segments``, last, a blank segment of the view reduced
+    ``levels`` times (cut where neighbours differ by ``segment_delta``; at least
+    ``segment_area`` of it, at most ``segment_sure`` of its pixels sure) takes the plane
+    that at least ``segment_support`` of the columns of sure pixels within ``segment_ring``
+    of it fit within ``inlier``, where its pixels lie more than ``segment_move`` off it."""
 
     enabled: bool = _param(False, doc="Planes across wide regions for unsure pixels.")
     levels: int = _param(3, 1, 5, doc="Pyramid levels down where the wide regions grow.")
@@ -304,6 +308,22 @@ class SurfacesConfig:
     long_arms: bool = _param(False, doc=(
         "For the unsure pixels no plane, bridge or refit filled: the planes of regions whose "
         "arms keep tau along their whole length (not the stricter arms.tau3 beyond arms.l1)."))
+    segments: bool = _param(False, doc=(
+        "Last, a large blank segment of the view, with few sure pixels inside, takes the "
+        "plane the sure pixels along its edge agree on (vsmatch.segments)."))
+    segment_delta: float = _param(3.0, 0.0, 255.0, doc=(
+        "Grey levels between neighbours of the view reduced levels times that cut segments."))
+    segment_area: float = _param(0.02, 0.0, 1.0, doc="Least share of the view a segment covers.")
+    segment_ring: int = _param(16, 1, 1024, doc=(
+        "How far (pixels) outside a segment its edge's sure pixels are taken from."))
+    segment_support: float = _param(0.3, 0.0, 1.0, doc=(
+        "Least share of the edge's columns (each weighing the same) the plane fits within "
+        "inlier."))
+    segment_sure: float = _param(0.05, 0.0, 1.0, doc=(
+        "Most share of a segment's pixels that may be sure: where the match found more "
+        "inside, its own disparities stand."))
+    segment_move: float = _param(2.0, 0.0, 1024.0, doc=(
+        "A segment's pixel takes the plane where it lies more than this (pixels) off it."))
 
 
 @dataclass(frozen=True)

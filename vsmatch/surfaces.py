@@ -25,6 +25,10 @@ close about it (a road or wall beyond the right view's edge, too, from its visib
 With ``long_arms``, what all this leaves unsure takes the plane of regions whose arms keep
 one colour threshold along their whole length: a wall whose shading changes by more than
 ``arms.tau3`` within the reach of the regions above, sure only far from its blank part.
+
+With ``segments``, last, a blank segment of the view (``vsmatch.segments``) where the match
+found almost nothing sure takes the plane its edge's sure pixels show, where its pixels lie
+off it: a white wall wider than every region, sure nowhere but along its skirting board.
 """
 
 from __future__ import annotations
@@ -43,6 +47,7 @@ from .disparity import VALID
 from .images import grey_levels
 from .level import matching_costs
 from .planes import region_planes
+from .segments import blank_segments, edge_plane, segment_mask
 from .sensitivity import texture
 
 
@@ -131,7 +136,31 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
             settle |= was_unsure & wider_close
         out[settle] = plane[settle]
         confidence[agree] = np.maximum(confidence[agree], np.float32(s.refit_confidence))
+    if s.segments:
+        _segment_planes(out, confidence, left, disp, sure, s)
     return Spread(np.clip(out, 0, max_disp, out=out), confidence)
+
+
+def _segment_planes(out: np.ndarray, confidence: np.ndarray, left: np.ndarray,
+                    disp: np.ndarray, sure: np.ndarray, s: SurfacesConfig) -> None:
+    """In place: each blank segment where the match found little sure takes its edge's
+    plane (``vsmatch.segments``) where ``out`` lies more than ``s.segment_move`` off it; a
+    pixel so moved keeps a confidence of at most ``s.bridge_confidence`` (a guess from the
+    edge, out of the cloud)."""
+    labels, large = blank_segments(left, s.levels, s.segment_delta, s.segment_area)
+    rows, columns = np.indices(out.shape, dtype=np.float32)
+    for label in large:
+        mask = segment_mask(labels, label, out.shape)
+        if np.count_nonzero(mask & sure) > s.segment_sure * np.count_nonzero(mask):
+            continue  # the match saw this surface: its disparities stand
+        plane = edge_plane(disp, sure, mask, s.segment_ring, s.inlier)
+        if plane is None or plane.support < s.segment_support:
+            continue
+        values = (plane.a * columns + plane.b * rows + plane.c).astype(np.float32)
+        with np.errstate(invalid="ignore"):
+            move = mask & ~(np.abs(values - out) <= s.segment_move)
+        out[move] = values[move]
+        np.minimum(confidence, np.float32(s.bridge_confidence), out=confidence, where=move)
 
 
 def _close_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, s: SurfacesConfig,
