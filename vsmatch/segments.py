@@ -99,7 +99,7 @@ def edge_plane(disparity: np.ndarray, sure: np.ndarray, mask: np.ndarray, ring: 
         near = np.abs(points @ best - values) <= inlier
         best = np.linalg.lstsq(points[near], values[near], rcond=None)[0]
     near = np.abs(points @ best - values) <= inlier
-    rows, columns = np.nonzero(mask)
+    rows, columns = (np.flatnonzero(mask.any(axis=axis)) for axis in (1, 0))
     for inside, extent in ((ys[near], np.ptp(rows)), (xs[near], np.ptp(columns))):
         low, high = np.percentile(inside, [5, 95]) if inside.size else (0, 0)
         if high - low < SPAN * extent:

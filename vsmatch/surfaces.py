@@ -148,7 +148,6 @@ def _segment_planes(out: np.ndarray, confidence: np.ndarray, left: np.ndarray,
     pixel so moved keeps a confidence of at most ``s.bridge_confidence`` (a guess from the
     edge, out of the cloud)."""
     labels, large = blank_segments(left, s.levels, s.segment_delta, s.segment_area)
-    rows, columns = np.indices(out.shape, dtype=np.float32)
     for label in large:
         mask = segment_mask(labels, label, out.shape)
         if np.count_nonzero(mask & sure) > s.segment_sure * np.count_nonzero(mask):
@@ -156,11 +155,19 @@ def _segment_planes(out: np.ndarray, confidence: np.ndarray, left: np.ndarray,
         plane = edge_plane(disp, sure, mask, s.segment_ring, s.inlier)
         if plane is None or plane.support < s.segment_support:
             continue
-        values = (plane.a * columns + plane.b * rows + plane.c).astype(np.float32)
+        # Within the segment's bounding box only: a camera-size view's full-size maps of
+        # coordinates would cost more than the step.
+        rows, columns = (np.flatnonzero(mask.any(axis=axis)) for axis in (1, 0))
+        box = (slice(rows[0], rows[-1] + 1), slice(columns[0], columns[-1] + 1))
+        values = (np.float32(plane.a) * np.arange(box[1].start, box[1].stop, dtype=np.float32)
+                  + np.float32(plane.b) * np.arange(box[0].start, box[0].stop,
+                                                    dtype=np.float32)[:, None]
+                  + np.float32(plane.c))
         with np.errstate(invalid="ignore"):
-            move = mask & ~(np.abs(values - out) <= s.segment_move)
-        out[move] = values[move]
-        np.minimum(confidence, np.float32(s.bridge_confidence), out=confidence, where=move)
+            move = mask[box] & ~(np.abs(values - out[box]) <= s.segment_move)
+        out[box][move] = values[move]
+        np.minimum(confidence[box], np.float32(s.bridge_confidence), out=confidence[box],
+                   where=move)
 
 
 def _close_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, s: SurfacesConfig,
