@@ -215,7 +215,7 @@ def test_stripes_agree_with_one_piece_but_near_seams(teddy):
     assert abs(bad_cut - bad_one) < 0.3
 
 
-@pytest.mark.parametrize("base", ["default", "fast"])
+@pytest.mark.parametrize("base", ["default", "fast", "accurate"])
 def test_striped_and_pyramid_results_do_not_depend_on_threads(teddy, base):
     s = teddy
     cfg = config_from_dict({"memory": {"max_mb": 60}, "pyramid": {"max_row_cells": 20000}},

@@ -271,12 +271,22 @@ def test_accurate_makes_the_ukuleles_wall_one_surface(data_dir):
     default; accurate's blank segments give it the plane its edges show (measured: 5th to
     95th percentile 77.9-82.5 left, 76.7-82.0 right: it nears the camera towards the top,
     which looks down on it)."""
+    import numba
+
     left, right, _ = real_pair(data_dir, "ukulele-raw")
     disp = vsmatch.match(left, right, config="accurate")
     for wall in ((slice(20, 400), slice(30, 380)), (slice(20, 400), slice(720, 1250))):
         values = disp[wall][np.isfinite(disp[wall])]
         low, high = np.percentile(values, [5, 95])
         assert high - low < 8 and 74 < low and high < 86, (low, high)
+    # The segments' planes (RANSAC, least squares) are the same bytes on one thread.
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        alone = vsmatch.match(left, right, config="accurate")
+    finally:
+        numba.set_num_threads(before)
+    assert alone.tobytes() == disp.tobytes()
 
 
 def test_the_near_desk_top_is_found(data_dir):

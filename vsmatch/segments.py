@@ -80,28 +80,48 @@ def edge_plane(disparity: np.ndarray, sure: np.ndarray, mask: np.ndarray, ring: 
     step = -(-xs.size // MOST_POINTS)
     ys, xs = ys[::step], xs[::step]
     values = disparity[ys, xs].astype(np.float64)
-    # Each column weighs the same in all.
-    weight = 1.0 / np.bincount(xs)[xs]
-    points = np.column_stack([xs, ys, np.ones(xs.size)]).astype(np.float64)
+    weight = 1.0 / np.bincount(xs)[xs]  # each column weighs the same in all
+    xs, ys = xs.astype(np.float64), ys.astype(np.float64)
+
+    def off(plane: np.ndarray) -> np.ndarray:
+        # Element by element, no BLAS: the same bytes whatever its threads.
+        return np.abs(plane[0] * xs + plane[1] * ys + plane[2] - values)
+
     draws = np.random.default_rng(0).integers(0, xs.size, (CANDIDATES, 3))
     best, best_weight = None, -1.0
     for picked in draws:
+        corners = np.column_stack([xs[picked], ys[picked], np.ones(3)])
         try:
-            plane = np.linalg.solve(points[picked], values[picked])
+            plane = np.linalg.solve(corners, values[picked])
         except np.linalg.LinAlgError:
             continue
-        fitting = weight[np.abs(points @ plane - values) <= inlier].sum()
+        fitting = weight[off(plane) <= inlier].sum()
         if fitting > best_weight:
             best, best_weight = plane, fitting
     if best is None:
         return None
-    for _ in range(2):
-        near = np.abs(points @ best - values) <= inlier
-        best = np.linalg.lstsq(points[near], values[near], rcond=None)[0]
-    near = np.abs(points @ best - values) <= inlier
+    try:
+        for _ in range(2):
+            best = _least_squares(xs, ys, values, off(best) <= inlier)
+    except np.linalg.LinAlgError:
+        return None  # the inliers on one line
+    near = off(best) <= inlier
     rows, columns = (np.flatnonzero(mask.any(axis=axis)) for axis in (1, 0))
     for inside, extent in ((ys[near], np.ptp(rows)), (xs[near], np.ptp(columns))):
         low, high = np.percentile(inside, [5, 95]) if inside.size else (0, 0)
         if high - low < SPAN * extent:
             return None
     return EdgePlane(*best, support=float(weight[near].sum() / weight.sum()))
+
+
+def _least_squares(xs: np.ndarray, ys: np.ndarray, values: np.ndarray, use: np.ndarray
+                   ) -> np.ndarray:
+    """The least-squares plane through the ``use`` points, by its normal equations about
+    their centre (NumPy's sums: the same bytes whatever the threads)."""
+    x, y, d = xs[use], ys[use], values[use]
+    cx, cy, cd = x.mean(), y.mean(), d.mean()
+    x, y, d = x - cx, y - cy, d - cd
+    a, b = np.linalg.solve(np.array([[(x * x).sum(), (x * y).sum()],
+                                     [(x * y).sum(), (y * y).sum()]]),
+                           np.array([(x * d).sum(), (y * d).sum()]))
+    return np.array([a, b, cd - a * cx - b * cy])
