@@ -176,22 +176,21 @@ def _distance_to(mask: np.ndarray) -> np.ndarray:
     return np.minimum(distance, MAX_DISTANCE).astype(np.float32)
 
 
-def term_names() -> list[str]:
-    """The model's terms, in the order :func:`model_weights` reads them: each feature
-    (``bias`` alone is the constant), then each product ``a*b`` of two features (a before
-    b in :data:`FEATURES`, a feature with itself too): a margin counts for more where
-    the check passed, a texture for less near a jump."""
-    names = list(FEATURES[1:])
-    pairs = [f"{a}*{b}" for i, a in enumerate(names) for b in names[i:]]
-    return [FEATURES[0], *names, *pairs]
-
-
 def term_cells() -> list[tuple[int, int]]:
-    """Each of :func:`term_names`' cells (i, j), i <= j, in the quadratic form over
-    :data:`FEATURES` (whose first is the constant 1)."""
+    """The model's terms as cells (i, j), i <= j, of the quadratic form over
+    :data:`FEATURES` (whose first is the constant 1): the bias, each feature, then each
+    product of two features (a feature with itself too)."""
     n = len(FEATURES)
     return ([(0, 0)] + [(0, k) for k in range(1, n)]
             + [(i, j) for i in range(1, n) for j in range(i, n)])
+
+
+def term_names() -> list[str]:
+    """The name of each of :func:`term_cells`, in its order (the keys of
+    ``confidence_weights.json``): ``bias``, a feature's name, or ``a*b`` for a product: a
+    margin counts for more where the check passed, a texture for less near a jump."""
+    return [FEATURES[j] if i == 0 else f"{FEATURES[i]}*{FEATURES[j]}"
+            for i, j in term_cells()]
 
 
 @lru_cache(maxsize=None)

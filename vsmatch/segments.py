@@ -68,6 +68,12 @@ def segment_mask(labels: np.ndarray, label: int, shape: tuple[int, int]) -> np.n
     return cv2.resize(cells, shape[::-1], interpolation=cv2.INTER_NEAREST).astype(bool)
 
 
+def bounding_box(mask: np.ndarray) -> tuple[slice, slice]:
+    """The rows and columns ``mask`` (not empty) spans."""
+    rows, columns = (np.flatnonzero(mask.any(axis=axis)) for axis in (1, 0))
+    return slice(rows[0], rows[-1] + 1), slice(columns[0], columns[-1] + 1)
+
+
 def edge_plane(disparity: np.ndarray, sure: np.ndarray, mask: np.ndarray, ring: int,
                inlier: float) -> EdgePlane | None:
     """The plane most columns of the ``sure`` pixels within ``ring`` pixels of ``mask``
@@ -106,8 +112,9 @@ def edge_plane(disparity: np.ndarray, sure: np.ndarray, mask: np.ndarray, ring: 
     except np.linalg.LinAlgError:
         return None  # the inliers on one line
     near = off(best) <= inlier
-    rows, columns = (np.flatnonzero(mask.any(axis=axis)) for axis in (1, 0))
-    for inside, extent in ((ys[near], np.ptp(rows)), (xs[near], np.ptp(columns))):
+    rows, columns = bounding_box(mask)
+    for inside, extent in ((ys[near], rows.stop - 1 - rows.start),
+                           (xs[near], columns.stop - 1 - columns.start)):
         low, high = np.percentile(inside, [5, 95]) if inside.size else (0, 0)
         if high - low < SPAN * extent:
             return None

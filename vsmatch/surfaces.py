@@ -47,7 +47,7 @@ from .disparity import VALID
 from .images import grey_levels
 from .level import matching_costs
 from .planes import region_planes
-from .segments import blank_segments, edge_plane, segment_mask
+from .segments import blank_segments, bounding_box, edge_plane, segment_mask
 from .sensitivity import texture
 
 
@@ -157,8 +157,7 @@ def _segment_planes(out: np.ndarray, confidence: np.ndarray, left: np.ndarray,
             continue
         # Within the segment's bounding box only: a camera-size view's full-size maps of
         # coordinates would cost more than the step.
-        rows, columns = (np.flatnonzero(mask.any(axis=axis)) for axis in (1, 0))
-        box = (slice(rows[0], rows[-1] + 1), slice(columns[0], columns[-1] + 1))
+        box = bounding_box(mask)
         values = (np.float32(plane.a) * np.arange(box[1].start, box[1].stop, dtype=np.float32)
                   + np.float32(plane.b) * np.arange(box[0].start, box[0].stop,
                                                     dtype=np.float32)[:, None]
