@@ -2,8 +2,8 @@
 
 For each Middlebury 2014 scene (its calib.txt gives f, baseline and doffs) and each
 threshold: the points `vsmatch run --cloud` would write (confidence at or above it), the
-share of them whose depth is more than 3 % off the ground truth's (among those with ground
-truth), and how many there are against the scene's non-occluded pixels.
+share of them whose depth is more than 3 % off the ground truth's (among those whose ground
+truth is known), and how many there are against the scene's non-occluded pixels.
 
     python scripts/cloud_threshold.py [--data-root DIR] [--dataset middlebury2014-quarter]
         [--config default]
@@ -18,7 +18,7 @@ import numpy as np
 
 from vsmatch import datasets, geometry, pipeline
 
-THRESHOLDS = (0.0, 0.5, 0.8, 0.9, 0.92, 0.95, 0.98)
+THRESHOLDS = (0.0, 0.5, 0.8, 0.85, 0.88, 0.9, 0.92, 0.95)
 DEPTH_TOLERANCE = 0.03
 
 
@@ -39,7 +39,8 @@ def main() -> int:
                               config=args.config)
         depth = geometry.depth_from_disparity(result.disparity, calib)
         truth = geometry.depth_from_disparity(scene.ground_truth, calib)
-        known = np.isfinite(truth)
+        # The scene's known ground truth (an unknown pixel reads 0, a finite depth).
+        known = scene.masks["all"] & np.isfinite(truth)
         nonocc = int(scene.masks["nonocc"].sum())
         cells = []
         for t in THRESHOLDS:

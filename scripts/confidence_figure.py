@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import argparse
 
-from vsmatch import confidence, datasets, evaluation, io, pipeline
+from vsmatch import datasets, evaluation, io, pipeline
+from vsmatch.config import load_config
 from vsmatch.figure import confidence_figure
 
 SCENES = (("middlebury2014-quarter", "Adirondack"), ("middlebury2014-quarter", "PianoL"),
@@ -29,7 +30,7 @@ def main() -> int:
         result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp)
         scoring = evaluation.scoring_for(dataset)
         rows.append(confidence_figure([scene], {name: result}, scoring,
-                                      confidence.DEFAULT_MIN_CONFIDENCE))
+                                      load_config().cloud.min_confidence))
     width = max(r.shape[1] for r in rows)
     import numpy as np
 

@@ -24,7 +24,7 @@ import yaml
 
 import vsmatch
 from vsmatch import datasets, evaluation, geometry, pipeline, rig
-from vsmatch.confidence import DEFAULT_MIN_CONFIDENCE, keep_confident
+from vsmatch.confidence import keep_confident
 from vsmatch.config import config_from_dict, load_config
 from vsmatch.search_range import estimate_disparity_range
 
@@ -79,7 +79,8 @@ def real_measures(cfg, left, right, camera) -> tuple[float, float, dict]:
     with np.errstate(invalid="ignore"):
         disagree = 100.0 * float(np.mean(~(np.abs(found - matches[:, 2]) <= 2)))
     depth = geometry.depth_from_disparity(
-        keep_confident(result.disparity, result.confidence, DEFAULT_MIN_CONFIDENCE), camera)
+        keep_confident(result.disparity, result.confidence,
+                       load_config(cfg).cloud.min_confidence), camera)
     sift_depth = camera.focal * camera.baseline / (matches[:, 2] + camera.doffs)
     bound = 1.5 * np.percentile(sift_depth[sift_depth > 0], 99)
     points = depth[np.isfinite(depth)]
@@ -126,21 +127,21 @@ def main() -> None:
                 disagree, beyond, result = real_measures(cfg, left, right, camera)
                 cells += [disagree, beyond]
                 if args.save:
-                    save_pictures(args.save, f"{name}_{pair_name}", left, result)
+                    save_pictures(args.save, f"{name}_{pair_name}", left, result,
+                                  load_config(cfg).cloud.min_confidence)
             cells.append(desk_near_top(root, cfg))
         print(f"{variant} | " + " | ".join(f"{c:.3f}" if abs(c) < 1 else f"{c:.2f}"
                                            for c in cells)
               + f" | {time.perf_counter() - start:.0f}", flush=True)
 
 
-def save_pictures(folder, stem, left, result) -> None:
+def save_pictures(folder, stem, left, result, threshold) -> None:
     from pathlib import Path
 
     from vsmatch.preview import disparity_preview
 
     Path(folder).mkdir(parents=True, exist_ok=True)
-    picture = disparity_preview(result["disparity"], result["confidence"],
-                                DEFAULT_MIN_CONFIDENCE)
+    picture = disparity_preview(result["disparity"], result["confidence"], threshold)
     cv2.imwrite(str(Path(folder) / f"{stem}.png"), picture)
 
 

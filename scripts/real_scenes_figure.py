@@ -19,7 +19,7 @@ import numpy as np
 
 import vsmatch
 from vsmatch import datasets, preview, rig
-from vsmatch.confidence import DEFAULT_MIN_CONFIDENCE, keep_confident
+from vsmatch.confidence import keep_confident
 from vsmatch.peers import sgbm_matcher
 
 #: Width of each tile in the picture.
@@ -83,7 +83,8 @@ def main() -> int:
         accurate = on_scale(keep_confident(accurate.disparity, accurate.confidence, 0.0), span)
         bar = ours[:, width:]
         conf = cv2.cvtColor((255 * result.confidence).astype(np.uint8), cv2.COLOR_GRAY2BGR)
-        kept = (result.confidence >= DEFAULT_MIN_CONFIDENCE).astype(np.uint8)
+        kept = (result.confidence >= vsmatch.load_config().cloud.min_confidence
+                ).astype(np.uint8)
         edges = cv2.dilate(kept, np.ones((3, 3), np.uint8)) - kept
         conf[edges > 0] = (0, 200, 0)
         rows.append(np.hstack([tile(left, name), tile(sgbm, "OpenCV SGBM"),

@@ -64,6 +64,15 @@ def standard_scenes(scenes):
 
 
 @pytest.fixture
+def lowest_cloud_threshold() -> float:
+    """The lowest ``cloud.min_confidence`` of the bundled configs: a cap meant to keep a
+    pixel out of every cloud must stay below it."""
+    from vsmatch.config import bundled_config_names, load_config
+
+    return min(load_config(name).cloud.min_confidence for name in bundled_config_names())
+
+
+@pytest.fixture
 def small_disk(tmp_path):
     """``small_disk(kilobytes)``: a folder on a tmpfs that small (a disk that fills up),
     unmounted after the test; skips where tmpfs cannot be mounted."""

@@ -260,7 +260,7 @@ def test_a_white_wall_stays_in_the_room(data_dir):
     result = vsmatch.run(left, right, config="default")
     depth = geometry.depth_from_disparity(
         confidence.keep_confident(result.disparity, result.confidence,
-                                  confidence.DEFAULT_MIN_CONFIDENCE), camera)
+                                  load_config("default").cloud.min_confidence), camera)
     points = depth[np.isfinite(depth)]
     assert points.size > 0.08 * depth.size  # measured 12 %: a wall with little texture
     assert np.mean(points > 2200) < 0.02  # measured 0.6 %
@@ -298,11 +298,11 @@ def test_the_near_desk_top_is_found(data_dir):
 
 # --- confidence at the range's ends ----------------------------------------------------------
 
-def test_winners_at_the_range_ends_are_never_trusted():
+def test_winners_at_the_range_ends_are_never_trusted(lowest_cloud_threshold):
     conf = np.full((1, 5), 0.99, np.float32)
     disp = np.array([[0.0, 0.4, 0.6, 30.4, 31.0]], np.float32)
     confidence.cap_range_ends(conf, disp, 32)
-    assert (conf[0, [0, 1, 4]] < confidence.DEFAULT_MIN_CONFIDENCE).all()
+    assert (conf[0, [0, 1, 4]] < lowest_cloud_threshold).all()
     assert (conf[0, [2, 3]] == np.float32(0.99)).all()
 
 
@@ -315,7 +315,7 @@ def test_noisy_views_switch_the_fit_and_the_planes():
     assert adapt_to_noise(cfg, 0.5).subpixel.fit == "equiangular"
 
 
-def test_a_textureless_blob_of_one_value_is_never_trusted():
+def test_a_textureless_blob_of_one_value_is_never_trusted(lowest_cloud_threshold):
     disp = np.full((40, 60), 17.0, np.float32)  # stuck at one value...
     ys, xs = np.mgrid[0:40, 0:60]
     disp[:, 30:] = 17 + 0.03 * xs[:, 30:] + 0.01 * ys[:, 30:]  # ... beside a slant
@@ -323,6 +323,6 @@ def test_a_textureless_blob_of_one_value_is_never_trusted():
     texture[:20, :20] = np.log1p(60.0)  # a textured corner of the flat part
     conf = np.full(disp.shape, 0.99, np.float32)
     confidence.cap_flat_blobs(conf, disp, texture)
-    assert (conf[25:, 5:20] < confidence.DEFAULT_MIN_CONFIDENCE).all()
+    assert (conf[25:, 5:20] < lowest_cloud_threshold).all()
     assert (conf[:12, :12] == np.float32(0.99)).all()  # textured: left alone
     assert (conf[:, 40:] == np.float32(0.99)).all()  # a slant is no blob

@@ -58,12 +58,6 @@ CURVE_FLOOR = 0.5
 #: those pairs average 0.02 (largest 0.08), and r on the datasets moves by <= 0.01.
 GATE_WINDOW, GATE_FROM, GATE_TO = 15, 0.12, 0.2
 RAW_GATE_FROM, RAW_GATE_TO = 0.003, 0.01
-#: The confidence below which --depth and --cloud leave a pixel out by default. Measured
-#: on the 9 Middlebury 2014 quarter-size scenes (scripts/cloud_threshold.py, default): of
-#: the points written, 2.9 % are more than 3 % off in depth, and 72 % as many points are
-#: written as the scenes have non-occluded pixels (every pixel: 15.5 %, 118 %; at 0.95
-#: 2.2 %, 66 %). Above 0.9, the most a pixel without texture or a refit keeps.
-DEFAULT_MIN_CONFIDENCE = 0.92
 #: Distances (pixels) beyond which the fill and jump distances count the same.
 MAX_DISTANCE = 16.0
 #: The densities of the sparsification curve: 5 %, 10 %, ... 100 %.
@@ -233,7 +227,7 @@ def combine(features: np.ndarray, disparity: np.ndarray,
 
 #: The confidence a winner at either end of the searched range keeps at most: its cost
 #: curve may still fall beyond the range (the true disparity lies outside it), so it is
-#: never trusted for depth and clouds (below :data:`DEFAULT_MIN_CONFIDENCE`).
+#: never trusted for depth and clouds (below every config's ``cloud.min_confidence``).
 RANGE_END_CONFIDENCE = 0.5
 
 
@@ -267,12 +261,12 @@ def cap_flat_blobs(confidence: np.ndarray, disparity: np.ndarray,
 
 #: A pixel without texture (the texture feature below log(1 + NO_TEXTURE): under an eighth
 #: of a grey level a pixel, as accurate's surfaces.flat) keeps at most TEXTURELESS_CONFIDENCE,
-#: below the cloud's threshold: the match saw nothing there, and a faint shading or a
-#: grey level of exposure left over can set it a few pixels off with a sharp cost curve
-#: (Vintage's wall). The ukulele wall's cloud beyond the room 0.73 -> 0.46 %, Middlebury
-#: 2014's cloud 2.9 -> 2.8 % wrong at 70 % kept (scripts/real_scenes.py,
-#: scripts/cloud_threshold.py); r within 0.004.
-NO_TEXTURE, TEXTURELESS_CONFIDENCE = 1.0, 0.9
+#: below every config's cloud.min_confidence: the match saw nothing there, and a faint
+#: shading or a grey level of exposure left over can set it a few pixels off with a sharp
+#: cost curve (Vintage's wall). The ukulele wall's cloud beyond the room 0.73 -> 0.46 %
+#: (scripts/real_scenes.py); r within 0.004. At 0.85 with the cloud's threshold at 0.88
+#: (0.9 and 0.92 before): the ukulele's 0.45 % (0.59 % with the cap left at 0.9).
+NO_TEXTURE, TEXTURELESS_CONFIDENCE = 1.0, 0.85
 
 
 def cap_textureless(confidence: np.ndarray, texture: np.ndarray) -> None:

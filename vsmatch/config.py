@@ -433,6 +433,16 @@ class TemporalConfig:
 
 
 @dataclass(frozen=True)
+class CloudConfig:
+    """What ``--depth`` and ``--cloud`` keep unless told otherwise (``--min-confidence``):
+    the confidence at which a pixel is likely right, measured per config
+    (``scripts/cloud_threshold.py``)."""
+
+    min_confidence: float = _param(0.88, 0.0, 1.0, doc=(
+        "Pixels below this confidence are left out of the depth map and the point cloud."))
+
+
+@dataclass(frozen=True)
 class Config:
     """All parameters of the method, one section per pipeline stage."""
 
@@ -451,6 +461,7 @@ class Config:
     photometric: PhotometricConfig = field(default_factory=PhotometricConfig)
     bands: BandsConfig = field(default_factory=BandsConfig)
     temporal: TemporalConfig = field(default_factory=TemporalConfig)
+    cloud: CloudConfig = field(default_factory=CloudConfig)
     # Scheduling, not the method: how the work is laid out (levels, stripes). In a file
     # these sit under ``schedule:``.
     pyramid: PyramidConfig = field(default_factory=PyramidConfig)
