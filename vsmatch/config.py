@@ -363,6 +363,35 @@ class PyramidConfig:
 
 
 @dataclass(frozen=True)
+class EdgesConfig:
+    """Depth edges decided again by adaptive support weights (``vsmatch.edges``): a pixel
+    near a step back along its row takes the disparity behind the step where a window
+    weighted by colour likeness to it explains the views better."""
+
+    enabled: bool = _param(False, doc=(
+        "Weigh each pixel near a depth step against the surface behind the step."))
+    radius: int = _param(8, 1, 32, doc="Half the window's side, pixels.")
+    colour_scale: float = _param(5.0, 0.1, 255.0, doc=(
+        "A window pixel weighs exp(-colour difference from the centre / this), grey levels."))
+    distance_scale: float = _param(100.0, 0.1, 10000.0, doc=(
+        "... and exp(-city-block distance / this), pixels."))
+    gradient_share: float = _param(0.9, 0.0, 1.0, doc=(
+        "Share of the x-gradient difference in the cost (the rest: the colour difference)."))
+    colour_cap: float = _param(10.0, 0.0, 255.0, doc="Colour difference truncated here.")
+    gradient_cap: float = _param(2.0, 0.0, 255.0, doc="Gradient difference truncated here.")
+    reach: int = _param(4, 1, 64, doc="Pixels along the row a step is looked for.")
+    jump: float = _param(2.0, 0.0, 1000.0, doc=(
+        "A step: a disparity this many pixels behind the pixel's own."))
+    margin: float = _param(0.1, 0.0, 10.0, doc=(
+        "The surface behind must cost less than the pixel's own by this share."))
+    min_texture: float = _param(4.0, 0.0, 10000.0, doc=(
+        "Pixels whose texture (Sobel |gx| + |gy| over 5 x 5, 8 a grey level a pixel) is "
+        "below this are left as they are."))
+    moved_confidence: float = _param(0.5, 0.0, 1.0, doc=(
+        "A moved pixel's confidence is at most this."))
+
+
+@dataclass(frozen=True)
 class PhotometricConfig:
     """Exposure and lighting differences (``vsmatch.photometric``): a quick first match on
     the views halved until at most ``max_width`` pixels wide (census and gradient costs
@@ -458,6 +487,7 @@ class Config:
     subpixel: SubpixelConfig = field(default_factory=SubpixelConfig)
     planes: PlanesConfig = field(default_factory=PlanesConfig)
     surfaces: SurfacesConfig = field(default_factory=SurfacesConfig)
+    edges: EdgesConfig = field(default_factory=EdgesConfig)
     photometric: PhotometricConfig = field(default_factory=PhotometricConfig)
     bands: BandsConfig = field(default_factory=BandsConfig)
     temporal: TemporalConfig = field(default_factory=TemporalConfig)

@@ -10,7 +10,8 @@ import functools
 
 import numpy as np
 
-from . import confidence, exposure, photometric, planes, pyramid, scale, surfaces
+from . import (confidence, edges, exposure, photometric, planes, pyramid, scale,
+               surfaces)
 from . import temporal as video
 from .checks import check_pair, check_views  # noqa: F401  (the inputs' checks, re-exported)
 from .config import Config, load_config
@@ -87,6 +88,12 @@ def _search_whole_range(left: np.ndarray, right: np.ndarray, max_disp: int,
             result.disparity, result.confidence = surfaces.spread_planes(
                 result.disparity, result.confidence, result.labels, left, right, max_disp,
                 result.config, result.colour_weight)
+    # 7. A pixel just before a step back may belong to the surface behind it: aggregation
+    #    spills a surface's disparity a few pixels past its edge.
+    if cfg.edges.enabled:
+        with timed(result.seconds, "edges"):
+            result.disparity, result.confidence = edges.weigh_edges(
+                result.disparity, result.confidence, left, right, result.config.edges)
     return result
 
 
