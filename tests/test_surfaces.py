@@ -29,9 +29,11 @@ def _inputs(pair):
 
 
 def _config(**changes):
-    # The synthetic pair's grey levels spread 71 (view_contrast): its wide regions grown as
-    # a view's of full contrast, unless a test says otherwise.
+    # The synthetic pair's grey levels spread 71 (view_contrast): its wide regions grown,
+    # and its unsure pixels chosen, as a view's of full contrast, unless a test says
+    # otherwise.
     changes.setdefault("contrast", None)
+    changes.setdefault("take_contrast", None)
     cfg = load_config("accurate")
     return dataclasses.replace(cfg, surfaces=dataclasses.replace(cfg.surfaces, **changes))
 
@@ -46,6 +48,22 @@ def test_an_unsure_wrong_block_takes_its_planes_value(pair):
     assert np.mean(np.abs(out[BLOCK] - truth) <= 1.0) > 0.95
     sure = confidence >= 0.5
     assert np.array_equal(out[sure], disp[sure])  # the sure pixels keep their values
+
+
+def test_a_view_of_little_contrast_leaves_more_pixels_as_they_are(pair):
+    """take shrinks with the view's contrast below take_contrast: a block of confidence
+    0.3 (below accurate's take of 0.35) takes its plane in a view of full contrast, and is
+    left alone in the synthetic pair (contrast 71) when take_contrast is 120 (take 0.21)."""
+    disp, confidence, labels = _inputs(pair)
+    disp[BLOCK] = 2.0
+    confidence[BLOCK] = 0.3
+    changes = dict(bridge=0, refit=False, long_arms=False, segments=False)
+    taken = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
+                          _config(**changes)).disparity
+    assert np.mean(np.abs(taken[BLOCK] - pair.disparity[BLOCK]) <= 1.0) > 0.95
+    kept = spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
+                         _config(take_contrast=120, **changes)).disparity
+    assert np.array_equal(kept[BLOCK], disp[BLOCK])
 
 
 def test_a_plane_that_explains_the_views_worse_is_refused(pair):

@@ -258,6 +258,9 @@ class SurfacesConfig:
         "shrinks in proportion; null: tau whatever the contrast."))
     fit: float = _param(0.5, 0.0, 1.0, doc="Least confidence of the pixels a plane is fitted to.")
     take: float = _param(0.3, 0.0, 1.0, doc="A pixel below this confidence may take its plane.")
+    take_contrast: float | None = _param(None, 1.0, 255.0, nullable=True, doc=(
+        "A view's contrast below which take shrinks in proportion; null: take whatever "
+        "the contrast."))
     min_share: float = _param(0.05, 0.0, 1.0, doc=(
         "Share of a region's pixels that must be sure for a plane."))
     max_spread: float = _param(1.0, 0.0, 100.0, doc=(

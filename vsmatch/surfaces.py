@@ -81,7 +81,7 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     flat = (texture(grey_levels(left)) < s.flat if s.flat is not None
             else np.zeros(disp.shape, bool))
     sure = (labels == VALID) & np.isfinite(disp) & (confidence >= s.fit) & ~flat
-    was_unsure = (confidence < s.take) | flat
+    was_unsure = (confidence < _take_level(s, contrast)) | flat
     plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier)
     take = close & was_unsure
     # The found disparities' window cost, computed once and only when a check needs it.
@@ -245,6 +245,15 @@ def view_contrast(view: np.ndarray) -> float:
     counts = np.cumsum(np.bincount(grey_levels(view).ravel(), minlength=256))
     low, high = np.searchsorted(counts, [0.1 * counts[-1], 0.9 * counts[-1]])
     return float(high - low)
+
+
+def _take_level(s: SurfacesConfig, contrast: float) -> float:
+    """The confidence below which a pixel may take a plane: ``s.take``, shrunk in proportion
+    to a view's ``contrast`` below ``s.take_contrast`` (the costs of a dark view's right
+    matches separate less, and its confidence reads lower)."""
+    if s.take_contrast is None:
+        return s.take
+    return s.take * min(1.0, contrast / s.take_contrast)
 
 
 def _wide_arms(arms: ArmsConfig, s: SurfacesConfig, contrast: float,
