@@ -77,3 +77,18 @@ def test_grey_views_and_invalid_pixels(rng):
                           edges_config())
     assert np.all(np.isnan(disp[:5]))
     np.testing.assert_array_equal(disp[10:-10, FRONT_TO:FRONT_TO + 3], BACK)
+
+
+def test_blocks_of_rows_give_the_same_bytes_as_one_piece(rng, monkeypatch):
+    from vsmatch import edges
+
+    left, right, truth = square_before_wall(rng)
+    spilt = truth + rng.normal(0, 1.5, truth.shape).astype(np.float32)  # steps everywhere
+    spilt[:, FRONT_TO:FRONT_TO + 3] = FRONT
+    confidence = np.ones(truth.shape, np.float32)
+    whole = weigh_edges(spilt, confidence, left, right, edges_config())
+    monkeypatch.setattr(edges, "EDGE_ROWS", 7)
+    blocks = weigh_edges(spilt, confidence, left, right, edges_config())
+    assert (whole[0] != spilt).any()
+    assert whole[0].tobytes() == blocks[0].tobytes()
+    assert whole[1].tobytes() == blocks[1].tobytes()

@@ -21,9 +21,18 @@ from ._kernels.edges import weigh_edge_sides
 from .config import EdgesConfig
 from .images import as_channels, grey_levels
 from .sensitivity import sobel, texture
+from .tiles import row_blocks
 
 #: The Sobel x-derivative of a grey ramp of one grey level a pixel.
 SOBEL_GAIN = 8.0
+#: Rows weighed at a time: the gradients and the texture are made for a block and the rows
+#: around it its windows read (``edges.radius``, and :data:`FILTER_REACH` more for the
+#: filters behind them), so the memory is bounded whatever the image's height. Blocks give
+#: the same bytes as one piece (a test).
+EDGE_ROWS = 512
+#: Rows beyond a window's that its values depend on: the Sobel's one and the texture's
+#: 5 x 5 mean's two.
+FILTER_REACH = 3
 
 
 def weigh_edges(disp: np.ndarray, confidence: np.ndarray, left: np.ndarray,
@@ -32,15 +41,33 @@ def weigh_edges(disp: np.ndarray, confidence: np.ndarray, left: np.ndarray,
     the step where that explains the views better, and ``confidence`` with a moved
     pixel's at most ``cfg.moved_confidence`` (float32, new arrays)."""
     disp = np.ascontiguousarray(disp, dtype=np.float32)
-    grey_l, grey_r = grey_levels(left), grey_levels(right)
-    grad_l = np.ascontiguousarray(sobel(grey_l)[0] / np.float32(SOBEL_GAIN))
-    grad_r = np.ascontiguousarray(sobel(grey_r)[0] / np.float32(SOBEL_GAIN))
-    skip = np.ascontiguousarray(texture(grey_l) < cfg.min_texture)
     out = np.empty_like(disp)
-    weigh_edge_sides(disp, as_channels(left), as_channels(right), grad_l, grad_r, skip,
-                     cfg.radius, cfg.colour_scale, cfg.distance_scale, cfg.gradient_share,
-                     cfg.colour_cap, cfg.gradient_cap, cfg.reach, cfg.jump, cfg.margin, out)
+    left, right = as_channels(left), as_channels(right)
+    for top, bottom, y0, y1 in row_blocks(disp.shape[0], EDGE_ROWS, cfg.radius + FILTER_REACH):
+        rows = slice(y0, y1)
+        out[top:bottom] = _weigh_block(disp[rows], left[rows], right[rows],
+                                       cfg)[top - y0:bottom - y0]
     moved = np.isfinite(disp) & (out != disp)
     confidence = np.where(moved, np.minimum(confidence, np.float32(cfg.moved_confidence)),
                           confidence).astype(np.float32)
     return out, confidence
+
+
+def _weigh_block(disp: np.ndarray, left: np.ndarray, right: np.ndarray,
+                 cfg: EdgesConfig) -> np.ndarray:
+    """:func:`weigh_edges`' disparities for rows of the views ((H, W, C) uint8)."""
+    grey_l, grey_r = grey_levels(_as_image(left)), grey_levels(_as_image(right))
+    grad_l = np.ascontiguousarray(sobel(grey_l)[0] / np.float32(SOBEL_GAIN))
+    grad_r = np.ascontiguousarray(sobel(grey_r)[0] / np.float32(SOBEL_GAIN))
+    skip = np.ascontiguousarray(texture(grey_l) < cfg.min_texture)
+    out = np.empty_like(disp)
+    weigh_edge_sides(np.ascontiguousarray(disp), np.ascontiguousarray(left),
+                     np.ascontiguousarray(right), grad_l, grad_r, skip, cfg.radius,
+                     cfg.colour_scale, cfg.distance_scale, cfg.gradient_share, cfg.colour_cap,
+                     cfg.gradient_cap, cfg.reach, cfg.jump, cfg.margin, out)
+    return out
+
+
+def _as_image(view: np.ndarray) -> np.ndarray:
+    """A (H, W, 1) view as (H, W), as OpenCV takes a grey image; a colour one as it is."""
+    return view[:, :, 0] if view.shape[2] == 1 else view
