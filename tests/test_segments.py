@@ -31,6 +31,27 @@ def test_a_shaded_wall_is_one_blank_segment():
     assert labels[3, 2] != labels[3, 35]
 
 
+def test_a_steep_even_shading_is_one_segment_with_a_jump():
+    """A wall shaded from 230 to 50 across its width (4.5 grey levels a cell of the view
+    reduced 8 times, more than delta): cut everywhere by its steps alone, one segment where
+    only a step of 8 or a bend of 3 cuts; a step of 40 still cuts."""
+    view = _wall_view()
+    xs = np.arange(view.shape[1], dtype=np.float32)
+    view[:200, :140] = np.clip(230 - 180 * xs[:140] / view.shape[1], 0, 255)
+    view[:200, 170:] = np.clip(230 - 180 * xs[170:] / view.shape[1], 0, 255)
+    view[:60, 140:170] = np.clip(230 - 180 * xs[140:170] / view.shape[1], 0, 255)
+    assert not _one_wall(*segments.blank_segments(view, 3, 3.0, 0.02))
+    assert _one_wall(*segments.blank_segments(view, 3, 3.0, 0.02, jump=8.0))
+    steep = view.copy()
+    steep[:, 160:] = np.clip(steep[:, 160:].astype(int) - 40, 0, 255).astype(np.uint8)
+    assert not _one_wall(*segments.blank_segments(steep, 3, 3.0, 0.02, jump=8.0))
+
+
+def _one_wall(labels, large):
+    """The wall either side of the object (cells (3, 2) and (3, 35)) one large segment."""
+    return labels[3, 2] == labels[3, 35] and int(labels[3, 2]) in large
+
+
 def test_the_edge_plane_is_the_one_most_columns_show():
     height, width = 240, 320
     mask = np.zeros((height, width), bool)

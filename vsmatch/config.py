@@ -243,7 +243,8 @@ class SurfacesConfig:
     ``flat`` counts as unsure. With ``long_arms``, what the planes and bridges leave unsure,
     and what the refit leaves, take the plane of longer-armed regions (one threshold ``tau``
     along the whole arm). With ``segments``, last, a blank segment of the view reduced
-    ``levels`` times (cut where neighbours differ by ``segment_delta``; at least
+    ``levels`` times (cut where neighbours differ by ``segment_delta``, or, with
+    ``segment_jump``, by that, or where their step bends by ``segment_delta``; at least
     ``segment_area`` of it, at most ``segment_sure`` of its pixels sure) takes the plane
     that at least ``segment_support`` of the columns of sure pixels within ``segment_ring``
     of it fit within ``inlier``, where its pixels lie more than ``segment_move`` off it."""
@@ -315,7 +316,11 @@ class SurfacesConfig:
         "Last, a large blank segment of the view, with few sure pixels inside, takes the "
         "plane the sure pixels along its edge agree on (vsmatch.segments)."))
     segment_delta: float = _param(3.0, 0.0, 255.0, doc=(
-        "Grey levels between neighbours of the view reduced levels times that cut segments."))
+        "Grey levels between neighbours of the view reduced levels times that cut segments "
+        "(with segment_jump: a change of that many between one pair's step and the next's)."))
+    segment_jump: float | None = _param(None, 0.0, 255.0, nullable=True, doc=(
+        "Grey levels between neighbours that always cut; below it a smooth shading does not "
+        "(null: segment_delta between neighbours cuts)."))
     segment_area: float = _param(0.02, 0.0, 1.0, doc="Least share of the view a segment covers.")
     segment_ring: int = _param(16, 1, 1024, doc=(
         "How far (pixels) outside a segment its edge's sure pixels are taken from."))

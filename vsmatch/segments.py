@@ -3,7 +3,9 @@
 A wide blank wall is one piece of colour: reduced a few times (the sensor's noise averaged
 away), neighbouring pixels differ by a grey level or two across all of it, even where its
 shading runs from bright to dim. :func:`blank_segments` cuts the reduced view where
-neighbours differ by ``delta`` or more and keeps the large pieces. Inside such a piece the
+neighbours differ by ``delta`` or more (or, with ``jump``, by ``jump`` or more, or where the
+step between them bends by ``delta``: a shading steep near a lamp still runs evenly) and
+keeps the large pieces. Inside such a piece the
 match finds almost nothing sure; where it meets texture (a skirting board, an object on or
 before it) its own pixels are matched, and so are the texture's. :func:`edge_plane` fits,
 by RANSAC, the plane that most of the columns along that edge agree on: a column counts once
@@ -39,25 +41,39 @@ class EdgePlane(NamedTuple):
     support: float
 
 
-def blank_segments(view: np.ndarray, levels: int, delta: float, area: float
-                   ) -> tuple[np.ndarray, list[int]]:
+def blank_segments(view: np.ndarray, levels: int, delta: float, area: float,
+                   jump: float | None = None) -> tuple[np.ndarray, list[int]]:
     """The segments of ``view`` reduced ``levels`` times (pyrDown; labels, int32, 0: an
-    edge), cut where 4-neighbours differ by ``delta`` grey levels or more, and the labels of
-    those covering at least ``area`` of the reduced view."""
+    edge) and the labels of those covering at least ``area`` of the reduced view. Cut where
+    4-neighbours differ by ``delta`` grey levels or more; with ``jump``, where they differ
+    by ``jump`` or more, or where the difference itself changes by ``delta`` or more from
+    one pair of neighbours to the next: a wall's shading is a ramp, steep near a lamp, whose
+    steps between cells change little."""
     grey = grey_levels(view).astype(np.float32)
     for _ in range(levels):
         grey = cv2.pyrDown(grey)
     edge = np.zeros(grey.shape, bool)
-    across = np.abs(np.diff(grey, axis=1)) >= delta
-    down = np.abs(np.diff(grey, axis=0)) >= delta
-    edge[:, 1:] |= across
-    edge[:, :-1] |= across
-    edge[1:, :] |= down
-    edge[:-1, :] |= down
+    for axis in (0, 1):
+        step = np.diff(grey, axis=axis)
+        cut = np.abs(step) >= (delta if jump is None else jump)
+        _mark_both_sides(edge, cut, axis)
+        if jump is not None:
+            bend = np.abs(np.diff(step, axis=axis)) >= delta
+            inner = [slice(None), slice(None)]
+            inner[axis] = slice(1, -1)
+            edge[tuple(inner)] |= bend
     _, labels = cv2.connectedComponents((~edge).astype(np.uint8), connectivity=4)
     sizes = np.bincount(labels.ravel())
     sizes[0] = 0
     return labels, [int(k) for k in np.flatnonzero(sizes >= area * labels.size)]
+
+
+def _mark_both_sides(edge: np.ndarray, cut: np.ndarray, axis: int) -> None:
+    """In place: both cells of each pair of neighbours along ``axis`` that ``cut`` marks."""
+    before, after = [slice(None), slice(None)], [slice(None), slice(None)]
+    before[axis], after[axis] = slice(None, -1), slice(1, None)
+    edge[tuple(after)] |= cut
+    edge[tuple(before)] |= cut
 
 
 def segment_mask(labels: np.ndarray, label: int, shape: tuple[int, int]) -> np.ndarray:

@@ -147,7 +147,8 @@ def _segment_planes(out: np.ndarray, confidence: np.ndarray, left: np.ndarray,
     plane (``vsmatch.segments``) where ``out`` lies more than ``s.segment_move`` off it; a
     pixel so moved keeps a confidence of at most ``s.bridge_confidence`` (a guess from the
     edge, out of the cloud)."""
-    labels, large = blank_segments(left, s.levels, s.segment_delta, s.segment_area)
+    labels, large = blank_segments(left, s.levels, s.segment_delta, s.segment_area,
+                                   s.segment_jump)
     for label in large:
         mask = segment_mask(labels, label, out.shape)
         if np.count_nonzero(mask & sure) > s.segment_sure * np.count_nonzero(mask):
