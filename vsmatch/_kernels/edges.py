@@ -51,7 +51,7 @@ def weigh_edge_sides(disp, left, right, grad_l, grad_r, skip, radius, colour_sca
             if count == 1:
                 continue
             # Every candidate is weighed over the window pixels all of them see in the right
-            # view (the own disparity is the largest); the weights are the candidates' own.
+            # view (the own disparity is the largest), with one set of weights.
             nearest = candidates[0]
             farthest = candidates[0]
             for c in range(1, count):
