@@ -16,10 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from vsmatch import datasets, geometry, pipeline
+from vsmatch import datasets, evaluation, geometry, pipeline
 
 THRESHOLDS = (0.0, 0.5, 0.8, 0.85, 0.88, 0.9, 0.92, 0.95)
-DEPTH_TOLERANCE = 0.03
 
 
 def main() -> int:
@@ -37,18 +36,12 @@ def main() -> int:
         calib = geometry.read_calibration(Path(folder) / scene.name / "calib.txt")
         result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp,
                               config=args.config)
-        depth = geometry.depth_from_disparity(result.disparity, calib)
-        truth = geometry.depth_from_disparity(scene.ground_truth, calib)
-        # The scene's known ground truth (an unknown pixel reads 0, a finite depth).
-        known = scene.masks["all"] & np.isfinite(truth)
-        nonocc = int(scene.masks["nonocc"].sum())
         cells = []
         for t in THRESHOLDS:
-            written = np.isfinite(depth) & (result.confidence >= t)
-            checked = written & known
-            off = np.abs(depth[checked] - truth[checked]) > DEPTH_TOLERANCE * truth[checked]
-            wrong[t].append(100.0 * off.mean())
-            kept[t].append(100.0 * written.sum() / nonocc)
+            written = np.where(result.confidence >= t, result.disparity, np.float32(np.nan))
+            share_wrong, share_kept = evaluation.cloud_measures(written, scene, calib)
+            wrong[t].append(100.0 * share_wrong)
+            kept[t].append(100.0 * share_kept)
             cells.append(f"{wrong[t][-1]:6.1f}%/{kept[t][-1]:4.0f}%")
         print(f"{scene.name:<13}" + "".join(f"{c:>14}" for c in cells), flush=True)
     print(f"{'mean':<13}" + "".join(f"{np.mean(wrong[t]):6.1f}%/{np.mean(kept[t]):4.0f}%"

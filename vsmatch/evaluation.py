@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from . import metrics, volumes
+from . import geometry, metrics, volumes
 from .config import Config, config_from_dict, load_config
 from .datasets import DATASETS, Scene
 from .io import (all_or_none, imwrite_atomic, output_folder, write_confidence,
@@ -228,6 +228,23 @@ def save_scene_outputs(folder: Path, scene: Scene, disp: np.ndarray,
 def headline_mask(scene: Scene) -> np.ndarray:
     """The pixels an error image shows as evaluated: non-occluded where known, else all."""
     return scene.masks.get("nonocc", scene.masks["all"])
+
+
+#: A point of a cloud is wrong when its depth is more than this share off the truth's.
+DEPTH_TOLERANCE = 0.03
+
+
+def cloud_measures(written: np.ndarray, scene: Scene,
+                   calib: geometry.Calibration) -> tuple[float, float]:
+    """Of the points the disparity ``written`` (invalid where left out of the cloud) gives
+    with ``calib``: the share more than :data:`DEPTH_TOLERANCE` off the ground truth's
+    depth, among those whose ground truth is known (an unknown one reads 0, which gives a
+    finite depth), and how many there are against the scene's non-occluded pixels."""
+    depth = geometry.depth_from_disparity(written, calib)
+    truth = geometry.depth_from_disparity(scene.ground_truth, calib)
+    checked = np.isfinite(depth) & np.isfinite(truth) & scene.masks["all"]
+    off = np.abs(depth[checked] - truth[checked]) > DEPTH_TOLERANCE * truth[checked]
+    return float(off.mean()), float(np.isfinite(depth).sum() / scene.masks["nonocc"].sum())
 
 
 def headline_figure(scored: dict[str, Any]) -> float:
