@@ -81,7 +81,7 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     flat = (texture(grey_levels(left)) < s.flat if s.flat is not None
             else np.zeros(disp.shape, bool))
     sure = (labels == VALID) & np.isfinite(disp) & (confidence >= s.fit) & ~flat
-    was_unsure = (confidence < _take_level(s, contrast)) | flat
+    was_unsure = (confidence < _shrunk(s.take, contrast, s.take_contrast)) | flat
     plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier)
     take = close & was_unsure
     # The found disparities' window cost, computed once and only when a check needs it.
@@ -248,13 +248,11 @@ def view_contrast(view: np.ndarray) -> float:
     return float(high - low)
 
 
-def _take_level(s: SurfacesConfig, contrast: float) -> float:
-    """The confidence below which a pixel may take a plane: ``s.take``, shrunk in proportion
-    to a view's ``contrast`` below ``s.take_contrast`` (the costs of a dark view's right
-    matches separate less, and its confidence reads lower)."""
-    if s.take_contrast is None:
-        return s.take
-    return s.take * min(1.0, contrast / s.take_contrast)
+def _shrunk(value: float, contrast: float, reference: float | None) -> float:
+    """``value`` shrunk in proportion to a view's ``contrast`` below ``reference`` (None:
+    ``value`` whatever the contrast): a dark view's surfaces differ by fewer grey levels,
+    and its right matches' costs separate less, so its confidence reads lower."""
+    return value if reference is None else value * min(1.0, contrast / reference)
 
 
 def _wide_arms(arms: ArmsConfig, s: SurfacesConfig, contrast: float,
@@ -264,7 +262,7 @@ def _wide_arms(arms: ArmsConfig, s: SurfacesConfig, contrast: float,
     surfaces differ by fewer grey levels, and a region would grow across them. ``long``:
     the same threshold along the whole arm (``arms.tau3`` is stricter beyond ``arms.l1``)."""
     l2 = max(2, s.l2 >> s.levels)
-    tau = s.tau if s.contrast is None else s.tau * min(1.0, contrast / s.contrast)
+    tau = _shrunk(s.tau, contrast, s.contrast)
     return dataclasses.replace(arms, tau1=tau, tau2=tau, l2=l2, l1=min(arms.l1, l2 - 1),
                                tau3=tau if long else arms.tau3, kappa=0.0, shrink=False)
 
