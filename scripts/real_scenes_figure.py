@@ -3,8 +3,8 @@
 A desk (its near top seen at a slant), a white wall behind a ukulele (a raw rig, rectified
 first) and a road (a KITTI 2015 frame): the left view, OpenCV SGBM's disparity (HH, holes
 black), vsmatch's (default config) and vsmatch accurate's on the same colour scale (its bar
-on the right), and vsmatch's confidence (default; white = 1; what the cloud keeps, >= 0.92,
-outlined in green).
+on the right), and vsmatch's confidence (default; white = 1; what the cloud keeps, at or
+above the config's cloud.min_confidence, outlined in green).
 
     python scripts/real_scenes_figure.py [--data-root DIR] [--out docs/real_scenes.jpg]
 """

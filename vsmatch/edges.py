@@ -42,32 +42,26 @@ def weigh_edges(disp: np.ndarray, confidence: np.ndarray, left: np.ndarray,
     pixel's at most ``cfg.moved_confidence`` (float32, new arrays)."""
     disp = np.ascontiguousarray(disp, dtype=np.float32)
     out = np.empty_like(disp)
-    left, right = as_channels(left), as_channels(right)
     for top, bottom, y0, y1 in row_blocks(disp.shape[0], EDGE_ROWS, cfg.radius + FILTER_REACH):
         rows = slice(y0, y1)
         out[top:bottom] = _weigh_block(disp[rows], left[rows], right[rows],
                                        cfg)[top - y0:bottom - y0]
     moved = np.isfinite(disp) & (out != disp)
-    confidence = np.where(moved, np.minimum(confidence, np.float32(cfg.moved_confidence)),
-                          confidence).astype(np.float32)
+    confidence = confidence.astype(np.float32)  # a copy
+    np.minimum(confidence, np.float32(cfg.moved_confidence), out=confidence, where=moved)
     return out, confidence
 
 
 def _weigh_block(disp: np.ndarray, left: np.ndarray, right: np.ndarray,
                  cfg: EdgesConfig) -> np.ndarray:
-    """:func:`weigh_edges`' disparities for rows of the views ((H, W, C) uint8)."""
-    grey_l, grey_r = grey_levels(_as_image(left)), grey_levels(_as_image(right))
+    """:func:`weigh_edges`' disparities for rows of the views."""
+    grey_l, grey_r = grey_levels(left), grey_levels(right)
     grad_l = np.ascontiguousarray(sobel(grey_l)[0] / np.float32(SOBEL_GAIN))
     grad_r = np.ascontiguousarray(sobel(grey_r)[0] / np.float32(SOBEL_GAIN))
     skip = np.ascontiguousarray(texture(grey_l) < cfg.min_texture)
     out = np.empty_like(disp)
-    weigh_edge_sides(np.ascontiguousarray(disp), np.ascontiguousarray(left),
-                     np.ascontiguousarray(right), grad_l, grad_r, skip, cfg.radius,
-                     cfg.colour_scale, cfg.distance_scale, cfg.gradient_share, cfg.colour_cap,
-                     cfg.gradient_cap, cfg.reach, cfg.jump, cfg.margin, out)
+    weigh_edge_sides(np.ascontiguousarray(disp), as_channels(left), as_channels(right),
+                     grad_l, grad_r, skip, cfg.radius, cfg.colour_scale, cfg.distance_scale,
+                     cfg.gradient_share, cfg.colour_cap, cfg.gradient_cap, cfg.reach,
+                     cfg.jump, cfg.margin, out)
     return out
-
-
-def _as_image(view: np.ndarray) -> np.ndarray:
-    """A (H, W, 1) view as (H, W), as OpenCV takes a grey image; a colour one as it is."""
-    return view[:, :, 0] if view.shape[2] == 1 else view
