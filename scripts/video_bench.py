@@ -2,7 +2,7 @@
 describes, against per-frame matching and OpenCV SGBM in one run.
 
     python scripts/video_bench.py [--data-root D] [--config default --config fast]
-                                  [--frames 8] [--json out.json] [--quick]
+                                  [--frames 8] [--json out.json] [--quick] [--checks]
 
 Clips are made from real pairs with ground truth, each view with its own sensor noise
 (Gaussian, sigma = 2 grey levels, a new draw every frame, a fixed seed):
@@ -17,7 +17,15 @@ Measures, over pixels valid in two consecutive frames (and, sliding, with known 
 both): flicker = the share whose change differs from the true change by more than 1 px,
 the mean of that difference, the share of pixels switching validity; accuracy over the
 clip (bad 2.0 on Middlebury 2014, bad 1.0 on ETH3D, D1 on KITTI); frames per second after
-the first frame. Then frames per second at 640x480 and 1280x720, and the EuRoC clip's.
+the first frame. Then frames per second at 640x480 and 1280x720.
+
+``--checks`` measures instead what a stream must survive (EVALUATION.md, "Video"), each
+per frame and as a stream, on CHECK_SCENES: the share of confident pixels within 0.1 px of
+a whole number on the 30th frame of a still clip; a right camera that goes black, shows
+noise or moves 15 px down after three frames (the share of pixels at the config's cloud
+threshold); a pan by 40 % of the width and a cut to another scene given the same grey
+levels (the first frame after, bad 1.0, against that frame matched alone); and 100
+frames of one still 200 x 150 view (the last ten frames' bad 1.0 against per frame's).
 """
 
 from __future__ import annotations
@@ -102,6 +110,117 @@ def flicker(out, truths, masks, still):
     return float(np.mean(shares)), float(np.mean(means)), float(np.mean(switches))
 
 
+CHECK_SCENES = [("eth3d", "electro_1l"), ("eth3d", "forest_1s"),
+                ("middlebury2014-quarter", "Motorcycle"), ("kitti2015", "000001")]
+
+
+def results(clip, max_disp, config, temporal):
+    """Each frame's MatchResult, per frame or as one stream."""
+    matcher = StereoMatcher(max_disp=max_disp, config=config, temporal=temporal)
+    return [matcher.result(left, right) for left, right in clip]
+
+
+def integer_share(result, threshold: float) -> float:
+    """The share of confident pixels within 0.1 px of a whole number."""
+    sure = (result.confidence >= threshold) & np.isfinite(result.disparity)
+    d = result.disparity[sure]
+    return float(np.mean(np.abs(d - np.round(d)) < 0.1)) if d.size else 0.0
+
+
+def failed_right(view: np.ndarray, how: str, rng) -> np.ndarray:
+    """The right view of a camera that failed: black, noise, or moved 15 px down."""
+    if how == "black":
+        return np.zeros_like(view)
+    if how == "noise":
+        return rng.integers(0, 256, view.shape, dtype=np.uint8)
+    return np.concatenate([np.repeat(view[:1], 15, axis=0), view[:-15]])
+
+
+def matched_histogram(view: np.ndarray, like: np.ndarray) -> np.ndarray:
+    """``view`` with its grey levels mapped so that its histogram is ``like``'s."""
+    out = np.empty_like(view)
+    for c in range(view.shape[2] if view.ndim == 3 else 1):
+        a = view[..., c] if view.ndim == 3 else view
+        b = like[..., c] if like.ndim == 3 else like
+        source = np.cumsum(np.bincount(a.ravel(), minlength=256)) / a.size
+        target = np.cumsum(np.bincount(b.ravel(), minlength=256)) / b.size
+        table = np.searchsorted(target, source).clip(0, 255).astype(np.uint8)
+        if view.ndim == 3:
+            out[..., c] = table[a]
+        else:
+            out[:] = table[a]
+    return out
+
+
+def stream_checks(data_root: str, configs: list[str]) -> dict:
+    """What a stream must survive, per frame against as a stream (module docstring)."""
+    from vsmatch import load_config
+
+    report = {}
+    for kind, name in CHECK_SCENES:
+        scene = datasets.load_dataset(kind, data_root, names=[name])[0]
+        mask, top = evaluated(scene), scene.max_disp
+        for config in configs:
+            threshold = load_config(config).cloud.min_confidence
+            row = report.setdefault(f"{name} {config}", {})
+            rng = np.random.default_rng(SEED)
+            clip = still_clip(scene, 30, rng)[0]
+            for on in (False, True):
+                row[f"integer {on}"] = integer_share(results(clip, top, config, on)[-1],
+                                                     threshold)
+            for how in ("black", "noise", "moved"):
+                failed = clip[:3] + [(a, failed_right(b, how, rng)) for a, b in clip[3:6]]
+                for on in (False, True):
+                    row[f"{how} {on}"] = float(np.mean(
+                        [100 * np.mean(r.confidence >= threshold)
+                         for r in results(failed, top, config, on)[3:]]))
+            # A pan: a window of 60 % of the width, then 40 % of the width further.
+            height, width = scene.left.shape[:2]
+            w, jump = int(0.6 * width), int(0.4 * width)
+            clip = [(noisy(scene.left[:, x:x + w], rng), noisy(scene.right[:, x:x + w], rng))
+                    for x in (0, 0, 0, jump)]
+            after = [r.disparity for r in (results(clip, top, config, True)[-1],
+                                           results(clip[-1:], top, config, False)[0])]
+            truth, known = scene.ground_truth[:, jump:jump + w], mask[:, jump:jump + w]
+            row["pan"] = [accuracy(kind, d, truth, known) for d in after]
+            report[f"{name} {config}"] = row
+            print(f"{name:12s} {config:8s} integer {row['integer False']:.2f} / "
+                  f"{row['integer True']:.2f}  confident after black {row['black False']:.1f} / "
+                  f"{row['black True']:.1f} %, noise {row['noise False']:.1f} / "
+                  f"{row['noise True']:.1f} %, moved {row['moved False']:.1f} / "
+                  f"{row['moved True']:.1f} %  pan {row['pan'][1]:.2f} -> {row['pan'][0]:.2f}",
+                  flush=True)
+    # A cut to a scene of the same grey levels, and 100 frames of a small still view.
+    first, second = (datasets.load_dataset("eth3d", data_root, names=[n])[0]
+                     for n in ("electro_1l", "forest_1s"))
+    height = min(first.left.shape[0], second.left.shape[0])
+    width = min(first.left.shape[1], second.left.shape[1])
+    crops = [[centre_crop(v, height, width) for v in (s.left, s.right, s.ground_truth,
+                                                       evaluated(s))] for s in (first, second)]
+    crops[1][0] = matched_histogram(crops[1][0], crops[0][0])
+    crops[1][1] = matched_histogram(crops[1][1], crops[0][1])
+    top = max(first.max_disp, second.max_disp)
+    small = datasets.load_dataset("eth3d", data_root, names=["delivery_area_1s"])[0]
+    left, right, truth, known, small_top = upscaled_scene(small, 200 / small.left.shape[1])
+    left, right = (cv2.resize(v, (200, 150), interpolation=cv2.INTER_AREA) for v in (left, right))
+    truth = cv2.resize(truth, (200, 150), interpolation=cv2.INTER_NEAREST)
+    known = cv2.resize(known.astype(np.uint8), (200, 150), interpolation=cv2.INTER_NEAREST) > 0
+    for config in configs:
+        rng = np.random.default_rng(SEED)
+        clip = [(noisy(crops[k // 4][0], rng), noisy(crops[k // 4][1], rng)) for k in range(8)]
+        after = [accuracy("eth3d", r.disparity, crops[1][2], crops[1][3])
+                 for r in (results(clip, top, config, True)[4],
+                           results(clip[4:5], top, config, False)[0])]
+        clip = [(noisy(left, rng), noisy(right, rng)) for _ in range(100)]
+        drift = [float(np.mean([accuracy("eth3d", r.disparity, truth, known)
+                                for r in results(clip, small_top, config, on)[-10:]]))
+                 for on in (True, False)]
+        report[f"cut {config}"], report[f"drift {config}"] = after, drift
+        print(f"look-alike cut {config:8s} first frame after {after[1]:.2f} -> {after[0]:.2f}; "
+              f"100 frames of 200x150, last ten {drift[1]:.2f} -> {drift[0]:.2f}", flush=True)
+    return report
+
+
 def run_vsmatch(clip, max_disp, config, temporal):
     matcher = StereoMatcher(max_disp=max_disp, config=config, temporal=temporal)
     out, seconds = [], []
@@ -146,8 +265,15 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=8)
     parser.add_argument("--json", default=None)
     parser.add_argument("--quick", action="store_true", help="One scene, no sizes.")
+    parser.add_argument("--checks", action="store_true",
+                        help="What a stream must survive, instead (module docstring).")
     args = parser.parse_args()
     configs = args.config or ["default", "fast"]
+    if args.checks:
+        report = stream_checks(args.data_root, configs)
+        if args.json:
+            Path(args.json).write_text(json.dumps(report, indent=1))
+        return
     rows = methods(configs)
     warm = datasets.load_dataset("middlebury2014-quarter", args.data_root, names=["Teddy"])[0]
     for _, run in rows:  # compile every kernel before anything is timed

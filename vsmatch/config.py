@@ -461,6 +461,13 @@ class TemporalConfig:
     cut: float = _param(0.2, 0.0, 1.0, doc=(
         "A cut (a full search): the grey-level histograms of two frames this far apart "
         "(total variation, 0 to 1; a camera that moves keeps its histogram)."))
+    scene_change: float = _param(0.3, 0.0, 1.0, doc=(
+        "A cut too: more than this share of either view changed since the last frame, "
+        "after the image's shift (a camera that died, moved against the other, or a scene "
+        "of the same grey levels)."))
+    unseen: float = _param(0.01, 0.0, 1.0, doc=(
+        "A full search when more than this share of the pixels has no last estimate near "
+        "enough to search around (a pan into what the last frame did not show)."))
     planes: bool = _param(False, doc=(
         "Fit slanted planes on frames searched near the last one too (the held pixels "
         "keep the last full search's)."))

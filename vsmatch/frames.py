@@ -44,37 +44,150 @@ def open_source(source: str) -> cv2.VideoCapture:
     return capture
 
 
+#: Files beside the frames that are no frames and go unsaid: calibrations, EuRoC's index.
+COMPANIONS = (".yaml", ".yml", ".csv", ".txt", ".json")
+
+
+def frame_key(name: str):
+    """The order of a frame named ``name``: by the number in it (``2.png`` before
+    ``10.png``; time stamps of any number of digits in time order), else by name."""
+    stem = Path(name).stem
+    if stem.isdigit():
+        return (0, int(stem), "")
+    parts = re.split(r"(\d+)", stem)
+    return (1, 0, tuple((0, int(p), "") if p.isdigit() else (1, 0, p) for p in parts if p))
+
+
+def camera_folder(folder: str) -> tuple[dict, list[str], Path]:
+    """One camera's frames: {key: path}, the files skipped (not frames), and the folder
+    its ``sensor.yaml`` would be in. A folder holding ``data/`` and ``data.csv`` is one
+    camera of the EuRoC/ASL layout (``mav0/cam0``), its frames as the index names them;
+    any other folder holds its frames itself. Two files of one moment are refused."""
+    root = Path(folder)
+    data, index = root / "data", root / "data.csv"
+    if data.is_dir() and index.is_file():
+        return _indexed_frames(data, index) + (root,)
+    found, skipped = {}, []
+    for path in sorted(root.iterdir()):
+        if not path.is_file() or path.suffix.lower() in COMPANIONS:
+            continue
+        if path.name.startswith(".") or path.suffix.lower() not in io.IMAGE_EXTENSIONS:
+            skipped.append(path.name)
+            continue
+        key = frame_key(path.name)
+        if key in found:
+            raise FrameSourceError(f"{found[key]} and {path}: two frames of one moment; "
+                                   "keep one")
+        found[key] = path
+    return found, skipped, root
+
+
+def _indexed_frames(data: Path, index: Path) -> tuple[dict, list[str]]:
+    """EuRoC's ``data.csv``: ``#timestamp [ns],filename`` a line, the files in ``data/``."""
+    found, skipped = {}, []
+    for number, line in enumerate(index.read_text(errors="replace").splitlines(), 1):
+        line = line.strip()
+        if not line or line.startswith("#"):
+            continue
+        fields = [f.strip() for f in line.split(",")]
+        if len(fields) < 2 or not fields[0].isdigit():
+            raise FrameSourceError(f"{index}, line {number}: not 'timestamp,filename'")
+        path = data / fields[1]
+        if not path.is_file():
+            skipped.append(fields[1])
+            continue
+        key = (0, int(fields[0]), "")
+        if key in found:
+            raise FrameSourceError(f"{index}: time stamp {fields[0]} twice")
+        found[key] = path
+    return found, skipped
+
+
+#: Time stamps in nanoseconds have at least this many digits (EuRoC, ROS bag exports).
+NANOSECOND_DIGITS = 16
+
+
+def paired_keys(lefts: list, rights: list) -> list[tuple]:
+    """Left and right frames of one moment, in time order: the same key; between time
+    stamps in nanoseconds, the nearest within a quarter of the frame step (two cameras'
+    clocks seldom stamp a moment alike)."""
+    rights_set = set(rights)
+    pairs = [(k, k) for k in lefts if k in rights_set]
+    stamps = [k[1] for k in lefts] + [k[1] for k in rights]
+    if len(pairs) == len(lefts) or not all(
+            k[0] == 0 for k in lefts + rights) or min(stamps, default=0) < 10 ** (
+            NANOSECOND_DIGITS - 1):
+        return pairs
+    left_stamps = np.array([k[1] for k in lefts], np.int64)
+    right_stamps = np.array([k[1] for k in rights], np.int64)
+    if len(left_stamps) < 2 or not len(right_stamps):
+        return pairs
+    tolerance = np.median(np.diff(left_stamps)) / 4
+    pairs, taken = [], set()
+    for key, stamp in zip(lefts, left_stamps):
+        nearest = int(np.argmin(np.abs(right_stamps - stamp)))
+        if abs(right_stamps[nearest] - stamp) <= tolerance and nearest not in taken:
+            taken.add(nearest)
+            pairs.append((key, rights[nearest]))
+    return pairs
+
+
 class FolderPairs:
-    """Two folders of frames (``cam0/``, ``cam1/``) as a video: the frames of the same file
-    name, in name order, each pair read as ``vsmatch run`` reads one (16-bit frames keep
-    one scale). Frames named by their time stamp in nanoseconds (EuRoC, ROS bag exports)
-    give the frame rate."""
+    """Two folders of frames (``cam0/``, ``cam1/``; or EuRoC's ``mav0/cam0`` and
+    ``mav0/cam1`` as they ship) as a video: the frames of one moment, in time order, each
+    pair read as ``vsmatch run`` reads one (16-bit frames keep one scale). Frames named by
+    their time stamp in nanoseconds give the frame rate. Files that are no images and
+    frames that cannot be read are skipped (:meth:`skipped` says which)."""
 
     def __init__(self, left: str, right: str):
-        def frames(folder):
-            return {p.name: p for p in Path(folder).iterdir()
-                    if p.is_file() and p.suffix.lower() in io.IMAGE_EXTENSIONS}
-        lefts, rights = frames(left), frames(right)
-        self.names = sorted(lefts.keys() & rights.keys())
-        if not self.names:
-            raise FrameSourceError(f"{left} and {right}: no frames of the same name")
-        self.paths = [(lefts[n], rights[n]) for n in self.names]
-        alone = len(lefts.keys() ^ rights.keys())
+        (lefts, skipped_l, self.left_root), (rights, skipped_r, self.right_root) = (
+            camera_folder(left), camera_folder(right))
+        order = sorted(lefts), sorted(rights)
+        self.keys = paired_keys(*order)
+        if not self.keys:
+            raise FrameSourceError(f"{left} and {right}: no frames of the same name or "
+                                   "time stamp")
+        self.paths = [(lefts[a], rights[b]) for a, b in self.keys]
+        self.not_frames = [str(Path(left) / n) for n in skipped_l] + [
+            str(Path(right) / n) for n in skipped_r]
+        self.unreadable: list[str] = []
+        alone = len(lefts) + len(rights) - 2 * len(self.keys)
         self._unpaired = None if not alone else (
             f"{left} has {len(lefts)} frames, {right} {len(rights)}: {alone} frame"
-            f"{'s' if alone > 1 else ''} without a partner of the same name, counted as "
-            "failed")
+            f"{'s' if alone > 1 else ''} without a partner of the same name or time stamp, "
+            "counted as failed")
 
     def __iter__(self):
         for left, right in self.paths:
-            yield io.read_pair(left, right)
+            try:
+                yield io.read_pair(left, right)
+            except io.ImageError as exc:  # a frame cut short by a camera that stopped
+                self.unreadable.append(str(exc))
+
+    def sensor_files(self) -> list[str] | None:
+        """Both cameras' ``sensor.yaml`` (EuRoC), where both folders hold one."""
+        files = [root / "sensor.yaml" for root in (self.left_root, self.right_root)]
+        return [str(f) for f in files] if all(f.is_file() for f in files) else None
 
     def fps(self) -> float:
-        stamps = [Path(n).stem for n in self.names]
-        if len(stamps) < 2 or not all(s.isdigit() and len(s) >= 16 for s in stamps):
+        stamps = [k[1] for k, _ in self.keys]
+        if len(stamps) < 2 or not all(k[0] == 0 for k, _ in self.keys) or min(
+                stamps) < 10 ** (NANOSECOND_DIGITS - 1):
             return 0.0
-        step = float(np.median(np.diff([int(s) for s in stamps])))
+        step = float(np.median(np.diff(stamps)))
         return 1e9 / step if step > 0 else 0.0
+
+    def skipped(self) -> list[str]:
+        """One line each: the files that are not frames, the frames that could not be read."""
+        lines = []
+        if self.not_frames:
+            shown = ", ".join(self.not_frames[:3]) + (", ..." if len(self.not_frames) > 3
+                                                      else "")
+            lines.append(f"skipped {len(self.not_frames)} file"
+                         f"{'s' if len(self.not_frames) > 1 else ''} that are not images: "
+                         f"{shown}")
+        lines += [f"skipped a frame: {problem}" for problem in self.unreadable]
+        return lines
 
     def unpaired(self) -> str | None:
         return self._unpaired
@@ -145,17 +258,19 @@ def write_video(path: str, pictures, fps: float, codec: str) -> int:
     disk) is an OSError, never a short video."""
     writer, count = None, 0
     try:
-        for picture in pictures:
-            if writer is None:
-                writer = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*codec), fps,
-                                         picture.shape[1::-1])
-                if not writer.isOpened():
-                    raise OSError("OpenCV cannot write this video")
-            writer.write(picture)
+        for picture in pictures:  # made outside the silenced blocks: a progress bar shows
+            with io.native_stderr_silenced():
+                if writer is None:
+                    writer = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*codec), fps,
+                                             picture.shape[1::-1])
+                    if not writer.isOpened():
+                        raise OSError("OpenCV cannot write this video")
+                writer.write(picture)
             count += 1
     finally:
         if writer is not None:
-            writer.release()
+            with io.native_stderr_silenced():
+                writer.release()
     if count:
         written = video_frame_count(path)
         if written != count:

@@ -171,13 +171,14 @@ def read_pair(left_path: str | Path, right_path: str | Path, *, max_mb: float | 
 _STAGED: contextvars.ContextVar[list | None] = contextvars.ContextVar("staged", default=None)
 
 
-def write_atomic(path: str | Path, encode) -> None:
+def write_atomic(path: str | Path, encode, *, silenced: bool = True) -> None:
     """Write bytes made by ``encode(tmp_path)`` to ``path`` through a temporary file.
 
     ``encode`` receives a temporary path with the same extension (OpenCV picks the format
     from it) and must create that file; the result is renamed onto ``path`` (inside an
     :func:`all_or_none` block, when the block ends). A failure names ``path``, never the
-    temporary.
+    temporary. ``silenced`` False: ``encode`` keeps the C libraries off stderr itself (a
+    video's writer, whose frame loop shows a progress bar there).
     """
     path = Path(path)
     folder = check_output_file(path)
@@ -190,8 +191,8 @@ def write_atomic(path: str | Path, encode) -> None:
     os.close(fd)
     try:
         try:
-            with native_stderr_silenced():  # libpng's own "Write Error" line
-                encode(tmp)
+            with native_stderr_silenced() if silenced else contextlib.nullcontext():
+                encode(tmp)  # libpng's own "Write Error" line kept off stderr
         except OSError as exc:
             if str(shown) in str(exc):
                 raise

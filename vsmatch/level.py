@@ -148,6 +148,8 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
     if cfg.subpixel.median:
         with stage("median"):
             result = refinement.median3(result)
+    if held is not None:  # to the last bit: a whole-pixel copy would turn a floor to stairs
+        result[held] = bands.held[held]
 
     return MatchResult(disparity=result, labels=labels, seconds=seconds, config=cfg,
                        noise_sigma=noise_sigma, colour_weight=learnt.colour_weight, curve=curve)

@@ -15,6 +15,7 @@ import numpy as np
 
 from . import pipeline, rig, volumes
 from .config import Config, load_config
+from .disparity import INVALID_DISPARITY
 from .geometry import Calibration, CalibrationError, read_calibration
 from .search_range import resolve_range
 from .temporal import Temporal
@@ -101,6 +102,22 @@ class StereoMatcher:
         if not self.fixed_range and self._top_is_crowded(result, high):
             self.range = None  # the next frame looks for it again
         return result
+
+    def empty_result(self, left: np.ndarray) -> pipeline.MatchResult:
+        """A frame with no estimate (a stream's frame that gave no range): every pixel
+        invalid and of confidence 0, in the views' size as matched."""
+        shape = left.shape[:2]  # rectification keeps the size
+        return pipeline.MatchResult(
+            disparity=np.full(shape, INVALID_DISPARITY, np.float32),
+            confidence=np.zeros(shape, np.float32), config=self.config)
+
+    def reset(self) -> None:
+        """Start a new stream: the next frame is matched as a first one (its range found
+        again unless given)."""
+        if self.temporal is not None:
+            self.temporal.reset()
+        if not self.fixed_range:
+            self.range = None
 
     def compute(self, left: np.ndarray, right: np.ndarray) -> np.ndarray:
         """The left-view disparity of one frame (float32, inf = invalid)."""

@@ -18,7 +18,7 @@ from .config import Config, load_config
 from .images import to_grey
 from .level import solve
 from .result import Learnt, MatchResult, learn, timed
-from .temporal import Memory, Temporal
+from .temporal import Temporal
 
 
 def match(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0,
@@ -35,6 +35,8 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0
     updated; this frame then searches near the last one's disparities."""
     cfg = load_config(config)
     check_pair(left, right, max_disp, cfg, min_disp)
+    if temporal is not None:
+        temporal.follow(left, right, min_disp, max_disp)
     return scale.with_offset(functools.partial(_run_from_zero, cfg=cfg, temporal=temporal),
                              left, right, min_disp, max_disp)
 
@@ -44,19 +46,23 @@ def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Conf
     """Disparities ``0 .. max_disp``: near the last frame's when a stream's memory allows."""
     if temporal is None:
         return _search_whole_range(left, right, max_disp, cfg)
-    grey = to_grey(left)
-    memory = temporal.memory
-    temporal.reason = video.full_search_reason(memory, grey, max_disp, cfg.temporal)
-    if temporal.reason is None:
-        memory = video.aligned(memory, grey)  # a moving camera's memory moves with it
-        moved = video.changed(memory.grey, grey, cfg.temporal)
-        result = _search_near_last(left, right, max_disp, memory, moved)
+    grey, grey_right = to_grey(left), to_grey(right)
+    memory, planning = temporal.memory, {}
+    if memory is None:
+        temporal.reason, near = temporal.first_reason(), None
+    else:
+        with timed(planning, "bands"):
+            temporal.reason, near = video.plan(memory, grey, grey_right, max_disp,
+                                               cfg.temporal)
+    if near is not None:
+        result = _search_near_last(left, right, max_disp, near)
+        result.seconds = {**planning, **result.seconds}
         if result.confidence.mean() >= cfg.temporal.collapse * memory.full_confidence:
-            temporal.memory = video.remember(result, grey, max_disp, memory)
+            temporal.memory = video.remember(result, grey, grey_right, max_disp, near)
             return result
         temporal.reason = "confidence collapsed"
     result = _search_whole_range(left, right, max_disp, cfg)
-    temporal.memory = video.remember(result, grey, max_disp, config=cfg)
+    temporal.memory = video.remember(result, grey, grey_right, max_disp, config=cfg)
     return result
 
 
@@ -97,10 +103,11 @@ def _search_whole_range(left: np.ndarray, right: np.ndarray, max_disp: int,
     return result
 
 
-def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int, memory: Memory,
-                      moved: np.ndarray) -> MatchResult:
+def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int,
+                      near: video.Plan) -> MatchResult:
     """Disparities near the last frame's (``vsmatch.temporal``), held where the image
     held still; the exposure correction and colour weight the last full search learnt."""
+    memory = near.memory
     cfg = memory.config
     if not cfg.temporal.planes:
         cfg = dataclasses.replace(cfg, planes=dataclasses.replace(cfg.planes, enabled=False))
@@ -109,15 +116,13 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int, memory
         with timed(seconds, "photometric"):
             right = photometric.apply(right, memory.correction)
     learnt = _learn(left, right, cfg, memory.colour_weight, seconds)
-    with timed(seconds, "bands"):
-        bands = video.bands_from_previous(memory, moved, cfg.temporal)
     result = scale.in_stripes(functools.partial(solve, learnt=learnt), left, right, max_disp,
-                              cfg, bands)
+                              cfg, near.bands)
     result.seconds = {**seconds, **result.seconds}
     result.photometric = memory.correction
     result.curve = memory.curve  # the last full search's (a band's curve is short)
     _fit_planes(result, left, max_disp)
-    result.disparity = video.hold(memory.disparity, result.disparity, moved, cfg.temporal)
+    result.disparity = video.hold(near, result.disparity, cfg.temporal)
     return _with_confidence(result, left, max_disp)
 
 

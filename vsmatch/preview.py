@@ -64,11 +64,35 @@ def disparity_preview(disp: np.ndarray, confidence: np.ndarray | None,
     """A BGR picture of ``disp``: colours over the disparities present, pixels whose
     confidence is below ``min_confidence`` dimmed and hatched, a colour bar on the
     right with its values."""
-    valid = np.isfinite(disp)
-    trusted = valid if confidence is None else valid & (confidence >= min_confidence)
+    trusted = _trusted(disp, confidence, min_confidence)
     low, high = colour_range(disp, trusted)
+    return np.hstack([_shaded(disp, trusted, low, high),
+                      colour_bar(disp.shape[0], low, high)])
+
+
+def video_frame(disp: np.ndarray, confidence: np.ndarray | None, min_confidence: float,
+                low: float, high: float, depth_of=None) -> np.ndarray:
+    """A frame of the disparity video: as :func:`disparity_preview`, but its colours over
+    the searched range ``low .. high`` (the same in every frame, so that a colour keeps
+    its depth), and the bar's values depths by ``depth_of`` (disparity -> depth) when
+    given."""
+    trusted = _trusted(disp, confidence, min_confidence)
+    return np.hstack([_shaded(disp, trusted, low, high),
+                      colour_bar(disp.shape[0], low, high, depth_of)])
+
+
+def _trusted(disp: np.ndarray, confidence: np.ndarray | None, min_confidence: float
+             ) -> np.ndarray:
+    valid = np.isfinite(disp)
+    return valid if confidence is None else valid & (confidence >= min_confidence)
+
+
+def _shaded(disp: np.ndarray, trusted: np.ndarray, low: float, high: float) -> np.ndarray:
+    """``disp`` in colours over ``low .. high``; untrusted pixels dimmed and hatched,
+    invalid ones black."""
+    valid = np.isfinite(disp)
     scaled = np.zeros(disp.shape, np.uint8)
-    scaled[valid] = np.clip((disp[valid] - low) * (255.0 / (high - low)), 0, 255)
+    scaled[valid] = np.clip((disp[valid] - low) * (255.0 / max(high - low, 1e-6)), 0, 255)
     picture = cv2.applyColorMap(scaled, cv2.COLORMAP_TURBO)
     rejected = valid & ~trusted
     ys, xs = np.nonzero(rejected)
@@ -76,11 +100,12 @@ def disparity_preview(disp: np.ndarray, confidence: np.ndarray | None,
     picture[ys, xs] = (picture[ys, xs] * DIMMED).astype(np.uint8)
     picture[ys[hatch], xs[hatch]] = 160
     picture[~valid] = 0
-    return np.hstack([picture, colour_bar(disp.shape[0], low, high)])
+    return picture
 
 
-def colour_bar(height: int, low: float, high: float) -> np.ndarray:
-    """A vertical bar, ``high`` at the top, with about five labelled values."""
+def colour_bar(height: int, low: float, high: float, depth_of=None) -> np.ndarray:
+    """A vertical bar, ``high`` at the top, with about five labelled values (the depths
+    of those disparities by ``depth_of``, when given)."""
     panel = np.full((height, BAR_WIDTH + LABEL_WIDTH + 6, 3), 255, np.uint8)
     ramp = np.linspace(255, 0, height).astype(np.uint8)[:, None]
     panel[:, 4:4 + BAR_WIDTH] = cv2.applyColorMap(np.repeat(ramp, BAR_WIDTH, 1),
@@ -91,6 +116,9 @@ def colour_bar(height: int, low: float, high: float) -> np.ndarray:
         y = round(k * (height - 1) / (ticks - 1))
         value = high - k * (high - low) / (ticks - 1)
         text = f"{value:.1f}" if high - low < 20 else f"{value:.0f}"
+        if depth_of is not None:
+            depth = depth_of(value)
+            text = f"{depth:.3g}" if np.isfinite(depth) and depth > 0 else "far"
         baseline_y = min(max(y + 4, 10), height - 2)
         cv2.line(panel, (4 + BAR_WIDTH, y), (8 + BAR_WIDTH, y), (0, 0, 0), 1)
         cv2.putText(panel, text, (10 + BAR_WIDTH, baseline_y), cv2.FONT_HERSHEY_SIMPLEX,

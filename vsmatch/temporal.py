@@ -2,13 +2,16 @@
 
 After a frame searched over the whole range, a frame's candidates are bands around the
 last frame's disparities (``vsmatch.bands``), moved with the image: the 3 x 3 range of the
-last disparities, widened to ``temporal.motion`` pixels around where the image changed;
-still pixels whose estimate was sure are not searched again. The whole range is searched
-again every ``temporal.refresh`` frames, on a cut (the grey-level histogram changed), after
-a jump in exposure and when a frame's confidence collapses. Where the image holds still,
-the last disparity is held: the new one moves only part of the way (``temporal.hold``),
-and a pixel that loses its estimate keeps the last one; where it changed, the new estimate
-counts alone, so that a moving object leaves no trail.
+last disparities, widened to ``temporal.motion`` pixels around where either view changed;
+still pixels whose estimate was sure are not searched again, and keep their value to the
+last bit (sub-pixel included); unsure ones are searched around the last full search's
+estimate, so that they cannot walk. The whole range is searched again every
+``temporal.refresh`` frames, on a cut (the grey-level histogram changed, or much of either
+view did, after the image's shift), when the image moved to what the last frame did not
+show, after a jump in exposure and when a frame's confidence collapses. Where the image
+holds still, the last disparity is held: the new one moves only part of the way
+(``temporal.hold``), and a pixel that loses its estimate keeps the last one; where it
+changed, the new estimate counts alone, so that a moving object leaves no trail.
 """
 
 from __future__ import annotations
@@ -35,6 +38,11 @@ class Memory:
     disparity: np.ndarray  # float32, inf where there is no estimate
     confidence: np.ndarray
     grey: np.ndarray  # the left view, float32
+    grey_right: np.ndarray  # the right view, float32
+    # The last full search's disparities, moved with the image and replaced where it
+    # changed: the centre an unsure still pixel is searched around (never its own last
+    # value, which would let it walk a pixel a frame).
+    anchor: np.ndarray
     curve: dict[str, np.ndarray]  # the cost-curve features of the last full search
     config: Config  # the config of the stream
     correction: object  # photometric.Correction or None
@@ -49,8 +57,63 @@ class Temporal:
     range (``None``: it searched bands)."""
 
     def __init__(self):
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the stream: the next frame is matched as a first one."""
         self.memory: Memory | None = None
         self.reason: str | None = None
+        self._views: tuple | None = None
+        self._new_views = False
+
+    def follow(self, left: np.ndarray, right: np.ndarray, min_disp: int, max_disp: int
+               ) -> None:
+        """A frame of another size, other channels (grey after colour) or another range
+        (``min_disp`` included) starts a new stream: the memory is of other views."""
+        views = (left.shape, right.shape, left.dtype.str, right.dtype.str, min_disp, max_disp)
+        if self._views is not None and views != self._views:
+            self.memory = None
+            self._new_views = True
+        self._views = views
+
+    def first_reason(self) -> str:
+        """Why a frame without memory searches the whole range."""
+        reason = "new size, channels or range" if self._new_views else "first frame"
+        self._new_views = False
+        return reason
+
+
+@dataclass
+class Plan:
+    """A frame's search near the last one: the memory moved with the image, where either
+    view changed (grown by ``motion``), and each pixel's candidates."""
+
+    memory: Memory
+    moved: np.ndarray
+    bands: band_tools.Bands
+
+
+def plan(memory: Memory, grey: np.ndarray, grey_right: np.ndarray, max_disp: int,
+         cfg: TemporalConfig) -> tuple[str | None, Plan | None]:
+    """Why this frame searches the whole range (and None), or (None, how it searches near
+    the last one)."""
+    reason = full_search_reason(memory, grey, grey_right, max_disp, cfg)
+    if reason is not None:
+        return reason, None
+    memory = aligned(memory, grey, grey_right)  # a moving camera's memory moves with it
+    left_changed = changed_pixels(memory.grey, grey, cfg)
+    right_changed = changed_pixels(memory.grey_right, grey_right, cfg)
+    # A view mostly changed is a new scene for that camera (dead, frozen against a moving
+    # other, moved on its mount, cut to a look-alike scene): nothing held can be trusted.
+    if max(left_changed.mean(), right_changed.mean()) > cfg.scene_change:
+        return "cut", None
+    # A left pixel is still only if what it matched in the right view is still too.
+    moved = grown(left_changed | seen_from_left(right_changed, memory.disparity), cfg.motion)
+    bands = bands_from_previous(memory, moved, cfg)
+    unseen = (bands.count == 0) & ~np.isfinite(bands.held)
+    if unseen.mean() > cfg.unseen:
+        return "new view", None
+    return None, Plan(memory, moved, bands)
 
 
 #: Below this phase-correlation peak the views' shift is not trusted (taken as none).
@@ -98,43 +161,64 @@ def _moved(image: np.ndarray, dy: int, dx: int, fill) -> np.ndarray:
     return out
 
 
-def aligned(memory: Memory, grey: np.ndarray) -> Memory:
-    """The memory moved with the image (:func:`image_shift`), so that each pixel's memory
-    is of the same scene point; what came into view has none (and counts as changed)."""
+def aligned(memory: Memory, grey: np.ndarray, grey_right: np.ndarray) -> Memory:
+    """The memory moved with the image (:func:`image_shift`; a rigid rig moves both views
+    alike), so that each pixel's memory is of the same scene point; what came into view
+    has none (and counts as changed)."""
     dy, dx = image_shift(memory.grey, grey)
     if dy == 0 and dx == 0:
         return memory
     return dataclasses.replace(
         memory, disparity=_moved(memory.disparity, dy, dx, np.inf),
         confidence=_moved(memory.confidence, dy, dx, 0.0),
+        anchor=_moved(memory.anchor, dy, dx, np.inf),
         grey=_moved(memory.grey, dy, dx, -1e6),
+        grey_right=_moved(memory.grey_right, dy, dx, -1e6),
         curve={name: _moved(values, dy, dx, 0.0) for name, values in memory.curve.items()})
 
 
-def changed(previous: np.ndarray, grey: np.ndarray, cfg: TemporalConfig) -> np.ndarray:
-    """Where the image changed since the last frame: the mean absolute difference over
-    :data:`CHANGE_WINDOW` square windows above ``change``, grown by ``motion`` pixels (what
-    moved in, and what it uncovered)."""
+def changed_pixels(previous: np.ndarray, grey: np.ndarray, cfg: TemporalConfig) -> np.ndarray:
+    """Where a view changed since the last frame: the mean absolute difference over
+    :data:`CHANGE_WINDOW` square windows above ``change`` (noise cancels)."""
     difference = cv2.blur(np.abs(grey - previous), (CHANGE_WINDOW, CHANGE_WINDOW))
-    moved = (difference > cfg.change).astype(np.uint8)
-    if cfg.motion > 0:
-        size = 2 * cfg.motion + 1
-        moved = cv2.dilate(moved, np.ones((size, size), np.uint8))
-    return moved.astype(bool)
+    return difference > cfg.change
 
 
-def full_search_reason(memory: Memory | None, grey: np.ndarray, max_disp: int,
-                       cfg: TemporalConfig) -> str | None:
-    """Why this frame searches the whole range, or None (it searches bands)."""
-    if memory is None:
-        return "first frame"
+def grown(mask: np.ndarray, pixels: int) -> np.ndarray:
+    """``mask`` grown by ``pixels`` on every side (what moved in, and what it uncovered)."""
+    if pixels <= 0 or not mask.any():
+        return mask
+    size = 2 * pixels + 1
+    return cv2.dilate(mask.astype(np.uint8), np.ones((size, size), np.uint8)).astype(bool)
+
+
+def seen_from_left(right_mask: np.ndarray, disparity: np.ndarray) -> np.ndarray:
+    """``right_mask`` (right-view pixels) at each left pixel's match ``x - d`` of
+    ``disparity`` (the pixel itself where it has none)."""
+    width = right_mask.shape[1]
+    columns = np.arange(width, dtype=np.float32)[None, :]
+    with np.errstate(invalid="ignore"):
+        match = np.where(np.isfinite(disparity), columns - disparity, columns)
+    match = np.clip(np.rint(match), 0, width - 1).astype(np.intp)
+    return np.take_along_axis(right_mask, match, axis=1)
+
+
+def changed(previous: np.ndarray, grey: np.ndarray, cfg: TemporalConfig) -> np.ndarray:
+    """Where the left view changed since the last frame, grown by ``motion`` pixels."""
+    return grown(changed_pixels(previous, grey, cfg), cfg.motion)
+
+
+def full_search_reason(memory: Memory, grey: np.ndarray, grey_right: np.ndarray,
+                       max_disp: int, cfg: TemporalConfig) -> str | None:
+    """Why this frame searches the whole range whatever its pixels show, or None."""
     if memory.shape != grey.shape or memory.max_disp != max_disp:
-        return "new size or range"
+        return "new size, channels or range"
     if memory.since_full + 1 >= cfg.refresh:
         return "refresh"
-    if histogram_distance(memory.grey, grey) > cfg.cut:
+    pairs = ((memory.grey, grey), (memory.grey_right, grey_right))
+    if max(histogram_distance(a, b) for a, b in pairs) > cfg.cut:
         return "cut"
-    if abs(float(grey.mean()) - float(memory.grey.mean())) > cfg.exposure_jump:
+    if max(abs(float(b.mean()) - float(a.mean())) for a, b in pairs) > cfg.exposure_jump:
         return "exposure"
     return None
 
@@ -154,32 +238,43 @@ def bands_from_previous(memory: Memory, moved: np.ndarray, cfg: TemporalConfig
                         ) -> band_tools.Bands:
     """Each pixel's candidates: the last frame's 3 x 3 range widened by ``band``; where the
     image moved, its range over ``motion`` pixels around; none where the image held still
-    and the last estimate was sure (the pixel keeps it). An unsure estimate is searched
-    again around itself (a range over the motion window let it jump between frames: on
-    KITTI's still road D1 9.80, around itself 9.60, per frame 9.44; scripts/video_bench.py)."""
+    and the last estimate was sure (the pixel keeps it). An unsure still estimate is
+    searched again around the last full search's (the anchor's 3 x 3 range): around its
+    own last value it walked a pixel a frame on a still view (29 frames of 200 x 150: bad
+    1.0 7.6 -> 10.7), and over the motion window it jumped between frames (KITTI's still
+    road D1 9.80, around itself 9.60, per frame 9.44; scripts/video_bench.py)."""
     previous = memory.disparity
     low, high = band_tools.extremes(previous, 3)
-    unsure = memory.confidence < cfg.unsure
-    wide = moved
-    if cfg.motion > 0 and wide.any():
+    unsure = (memory.confidence < cfg.unsure) & ~moved
+    anchor_low, anchor_high = band_tools.extremes(memory.anchor, 3)
+    anchored = unsure & np.isfinite(anchor_low)
+    low = np.where(anchored, anchor_low, low)
+    high = np.where(anchored, anchor_high, high)
+    if cfg.motion > 0 and moved.any():
         low_far, high_far = band_tools.extremes(previous, 2 * cfg.motion + 1)
-        low = np.where(wide, low_far, low)
-        high = np.where(wide, high_far, high)
+        low = np.where(moved, low_far, low)
+        high = np.where(moved, high_far, high)
     with np.errstate(invalid="ignore"):
-        centre = np.where(np.isfinite(previous), previous, (low + high) / 2)
+        centre = np.where(anchored & np.isfinite(memory.anchor), memory.anchor, previous)
+        centre = np.where(np.isfinite(centre), centre, (low + high) / 2)
         bands = band_tools.around(low - cfg.band, high + cfg.band, centre,
                                   memory.max_disp + 1, cfg.max_band)
     # Still, sure pixels are not searched again: they keep the last disparity, and serve
     # the searched ones as consistent neighbours.
-    held = ~wide & ~unsure & np.isfinite(previous)
+    held = ~moved & ~unsure & np.isfinite(previous)
     bands.count[held] = 0
     return dataclasses.replace(bands, held=np.where(held, previous, np.inf).astype(np.float32))
 
 
-def hold(previous: np.ndarray, new: np.ndarray, moved: np.ndarray,
-         cfg: TemporalConfig) -> np.ndarray:
-    """The disparity shown: where the image held still, the last one moved part of the way
-    to the new one (and kept where the new frame has none); elsewhere the new one."""
+def hold(near: Plan, new: np.ndarray, cfg: TemporalConfig) -> np.ndarray:
+    """The disparity shown: where the image held still, the last estimate moved part of
+    the way to the new one (and kept where the new frame has none); elsewhere the new one.
+    A still pixel searched again (an unsure one) starts from the last full search's
+    estimate, not from its own last value: frame after frame the averages would carry it
+    wherever the narrower search leans (the error of a still view rising 0.9 -> 1.4)."""
+    memory, moved = near.memory, near.moved
+    previous = np.where(near.bands.count > 0, memory.anchor, memory.disparity)
+    previous = np.where(np.isfinite(previous), previous, memory.disparity)
     out = new.copy()
     still = ~moved & np.isfinite(previous)
     both = still & np.isfinite(new)
@@ -190,16 +285,19 @@ def hold(previous: np.ndarray, new: np.ndarray, moved: np.ndarray,
     return out
 
 
-def remember(result, grey: np.ndarray, max_disp: int, memory: Memory | None = None,
-             config: Config | None = None) -> Memory:
+def remember(result, grey: np.ndarray, grey_right: np.ndarray, max_disp: int,
+             plan: Plan | None = None, config: Config | None = None) -> Memory:
     """The memory a frame's result (``MatchResult``, matched from 0) leaves the next frame:
-    a full search's anew (``memory`` None; ``config`` the stream's), a band search's added
-    to the last."""
-    if memory is None:
+    a full search's anew (``plan`` None; ``config`` the stream's), a band search's added
+    to the last (its anchor replaced where the image changed)."""
+    disparity, confidence = result.disparity.copy(), result.confidence.copy()
+    if plan is None:
         curve = {name: values.copy() for name, values in result.curve.items()}
-        return Memory(grey.shape, int(max_disp), result.disparity.copy(),
-                      result.confidence.copy(), grey, curve, config, result.photometric,
+        return Memory(grey.shape, int(max_disp), disparity, confidence, grey, grey_right,
+                      disparity.copy(), curve, config, result.photometric,
                       result.colour_weight, float(result.confidence.mean()))
-    return Memory(memory.shape, memory.max_disp, result.disparity.copy(),
-                  result.confidence.copy(), grey, memory.curve, memory.config, memory.correction,
-                  memory.colour_weight, memory.full_confidence, memory.since_full + 1)
+    memory = plan.memory
+    anchor = np.where(plan.moved, disparity, memory.anchor)
+    return dataclasses.replace(memory, disparity=disparity, confidence=confidence, grey=grey,
+                               grey_right=grey_right, anchor=anchor,
+                               since_full=memory.since_full + 1)

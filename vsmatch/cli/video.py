@@ -8,9 +8,11 @@ from pathlib import Path
 
 import click
 import cv2
+import numpy as np
 
 from .. import frames, io, preview
 from ..matcher import StereoMatcher
+from ..search_range import PairGeometryError, RangeError
 from .common import (MAX_DISP, check_outputs, check_outside, config_option, echo, examples,
                      friendly_errors, verbose, verbosity_options)
 
@@ -74,29 +76,46 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
             io.check_replaceable_folder(frames_dir, overwrite=overwrite, ours=frames.is_frame_file)
         except OSError as exc:
             raise click.ClickException(str(exc)) from None
-    stereo = StereoMatcher(max_disp=max_disp, min_disp=min_disp, config=config,
-                           calib=list(calib) or None, temporal=temporal)
     if len(names) == 2 and all(Path(name).is_dir() for name in names):
         sources, pairs = [], frames.FolderPairs(*names)
         fps = pairs.fps() or 10.0
+        if not calib and pairs.sensor_files():  # EuRoC's cameras carry their calibration
+            calib = pairs.sensor_files()
+            echo(ctx, f"calibration: {calib[0]} and {calib[1]}")
     else:
         sources = [frames.open_source(name) for name in names]
         frames.check_frame_rates(names, sources)
         fps = sources[0].get(cv2.CAP_PROP_FPS) or 10.0
         pairs = frames.FramePairs(names, sources)
+    stereo = StereoMatcher(max_disp=max_disp, min_disp=min_disp, config=config,
+                           calib=list(calib) or None, temporal=temporal)
     count, start = 0, time.perf_counter()
+    threshold = stereo.config.cloud.min_confidence  # dimmed below it, as --preview does
     quiet = ctx.find_root().obj.get("quiet")
 
     full = 0  # frames that searched the whole range
+    no_range = []  # frames written empty: no range found yet (dark, blank)
 
     def pictures(frames_folder: Path | None):
         nonlocal count, full
-        with tqdm(total=max_frames, disable=quiet, unit="frame", leave=False) as bar:
+        total = len(pairs.paths) if isinstance(pairs, frames.FolderPairs) else None
+        if max_frames is not None:
+            total = max_frames if total is None else min(total, max_frames)
+        # A bar in a terminal only (None): a log file gets no carriage returns.
+        with tqdm(total=total, disable=True if quiet else None, unit="frame",
+                  leave=False) as bar:
             for frame_l, frame_r in pairs:
-                result = stereo.result(frame_l, frame_r)
+                try:
+                    result = stereo.result(frame_l, frame_r)
+                except RangeError as exc:
+                    if stereo.range is not None or isinstance(exc, PairGeometryError):
+                        raise
+                    no_range.append(str(exc))  # the range comes from a later frame
+                    result = stereo.empty_result(frame_l)
                 full += stereo.temporal is None or stereo.temporal.reason is not None
-                low, high = stereo.range or result.search_range
-                yield preview.colour_disparity(result.disparity, high, low)
+                low, high = stereo.range or result.search_range or (0, 1)
+                yield preview.video_frame(result.disparity, result.confidence, threshold,
+                                          low, high, depth_scale(stereo.camera))
                 if frames_folder is not None:
                     io.write_disparity(frames_folder / f"{count:06d}.pfm", result.disparity)
                     io.write_confidence(frames_folder / f"{count:06d}_confidence.pfm",
@@ -114,7 +133,7 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
                       else contextlib.nullcontext(None))
             with staged as frames_folder:
                 io.write_atomic(out, lambda tmp: _write_or_refuse(
-                    tmp, pictures(frames_folder), fps, out, left))
+                    tmp, pictures(frames_folder), fps, out, left), silenced=False)
         stopped = max_frames is not None and count >= max_frames
         unpaired = None if stopped else pairs.unpaired()
     finally:
@@ -127,7 +146,15 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
     rate = f", {count / seconds:.2f} fps" if count and seconds > 0 else ""
     searched = (f"; {full} searched the whole range, {count - full} near the last frame"
                 if temporal else "")
+    if no_range and len(no_range) == count:
+        raise click.ClickException(f"{no_range[0]} (no frame of {left} gave one)")
     echo(ctx, f"wrote {output} ({count} frames{rate}{searched})")
+    if no_range:
+        echo(ctx, f"warning: the first {len(no_range)} frame{'s' if len(no_range) > 1 else ''}"
+                  " gave no disparity range (dark or blank?) and were written empty",
+             err=True)
+    for line in getattr(pairs, "skipped", list)():
+        echo(ctx, f"warning: {line}", err=True)
     if unpaired is not None:
         raise click.ClickException(unpaired)
 
@@ -135,3 +162,11 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
 def _write_or_refuse(tmp: str, pictures, fps: float, out: Path, left: str) -> None:
     if frames.write_video(tmp, pictures, fps, frames.VIDEO_CODECS[out.suffix.lower()]) == 0:
         raise click.ClickException(f"{left}: no frame could be read")
+
+
+def depth_scale(camera):
+    """Disparity -> depth in the calibration's unit (None without one), for the bar."""
+    if camera is None:
+        return None
+    return lambda d: camera.focal * camera.baseline / (d + camera.doffs) if (
+        d + camera.doffs) > 0 else np.inf
