@@ -242,8 +242,9 @@ class FramePairs:
                 f"{'s' if extra > 1 else ''} without a partner, counted as failed")
 
 
-#: The files ``--frames`` holds: NNNNNN.pfm and NNNNNN_confidence.pfm.
-FRAME_FILE = re.compile(r"\d{6}(_confidence)?\.pfm")
+#: The files ``--frames`` holds (NNNNNN.pfm and NNNNNN_confidence.pfm), and
+#: ``--depth-frames`` and ``--cloud-frames`` (NNNNNN.pfm or .png, NNNNNN.ply).
+FRAME_FILE = re.compile(r"\d{6}((_confidence)?\.pfm|\.png|\.ply)")
 
 
 def is_frame_file(entry: Path) -> bool:

@@ -75,6 +75,7 @@ class StereoMatcher:
             else:
                 self.camera = read_calibration(paths[0])
         self.frames = 0
+        self.views: tuple[np.ndarray, np.ndarray] | None = None
         self._volumes = volumes.VolumePool()
 
     def rectify(self, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -92,6 +93,7 @@ class StereoMatcher:
     def result(self, left: np.ndarray, right: np.ndarray) -> pipeline.MatchResult:
         """The whole :class:`vsmatch.pipeline.MatchResult` of one frame."""
         left, right = self.rectify(left, right)
+        self.views = left, right  # as matched: a cloud's colours come from the left
         if self.range is None:
             self.range = self._find_range(left, right)
         low, high = self.range

@@ -10,7 +10,7 @@ import click
 import cv2
 import numpy as np
 
-from .. import frames, io, preview
+from .. import confidence, frames, geometry, io, preview
 from ..matcher import StereoMatcher
 from ..search_range import PairGeometryError, RangeError
 from .common import (MAX_DISP, check_outputs, check_outside, config_option, echo, examples,
@@ -33,8 +33,21 @@ from .main import main
               help="Also write each frame's disparity and confidence here "
                    "(NNNNNN.pfm, NNNNNN_confidence.pfm); a folder that holds anything is "
                    "refused unless --overwrite.")
+@click.option("--depth-frames", "depth_dir", type=click.Path(file_okay=False), default=None,
+              help="Also write each frame's depth here (NNNNNN.pfm in the calibration's "
+                   "unit, inf = unknown; or NNNNNN.png with --depth-png), the pixels at or "
+                   "above the config's cloud.min_confidence. Needs a calibration.")
+@click.option("--depth-png", is_flag=True,
+              help="--depth-frames as 16-bit PNGs as depth cameras write them: depth x 1000 "
+                   "(millimetres for a calibration in metres), 0 = unknown; needs "
+                   "--max-depth of at most 65.535 (the most a PNG holds), farther left out.")
+@click.option("--cloud-frames", "cloud_dir", type=click.Path(file_okay=False), default=None,
+              help="Also write each frame's coloured point cloud here (NNNNNN.ply), the "
+                   "pixels --depth-frames keeps. Needs a calibration.")
+@click.option("--max-depth", type=click.FloatRange(min=0, min_open=True), default=None,
+              help="Leave points farther than this out of --depth-frames and --cloud-frames.")
 @click.option("--overwrite", is_flag=True,
-              help="Replace a --frames folder of an earlier run's frames, as a whole (a "
+              help="Replace the frame folders of an earlier run, each as a whole (a "
                    "folder that holds anything else is refused).")
 @click.option("--max-disp", type=MAX_DISP, default=None,
               help="Largest disparity searched; default: the calibration's, else found "
@@ -52,8 +65,8 @@ from .main import main
 @verbosity_options
 @click.pass_context
 @friendly_errors
-def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_disp,
-          min_disp, calib, max_frames, temporal, config):
+def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_png, cloud_dir,
+          max_depth, overwrite, max_disp, min_disp, calib, max_frames, temporal, config):
     """Match the frames of two videos (or of one side-by-side video, of two cameras
     given by index, or of two folders of frames paired by file name, as EuRoC's cam0/
     and cam1/) and write the disparity as a colour video.
@@ -67,13 +80,25 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
         raise click.BadParameter(f"'{output}' must end in .avi or .mp4", param_hint="'-o'")
     if side_by_side == (right is not None):
         raise click.UsageError("give LEFT and RIGHT, or one LEFT with --side-by-side")
+    if depth_png and depth_dir is None:
+        raise click.UsageError("--depth-png says how --depth-frames are written: give "
+                               "--depth-frames too")
+    if depth_png and not (max_depth is not None and max_depth <= PNG_DEPTH_LIMIT):
+        raise click.UsageError(f"--depth-png holds depths up to {PNG_DEPTH_LIMIT} (x 1000 in "
+                               "16 bits): give --max-depth of at most that")
     names = [left] + ([] if right is None else [right])
     inputs = [n for n in names if not n.isdigit()] + list(calib)
-    check_outputs(inputs, [output], folders={frames_dir: []} if frames_dir else {})
-    if frames_dir is not None:  # the folder is replaced as a whole: nothing else in it
-        check_outside(Path(frames_dir), [*inputs, output], "--frames folder")
+    folders = {name: folder for name, folder in (("--frames", frames_dir),
+                                                 ("--depth-frames", depth_dir),
+                                                 ("--cloud-frames", cloud_dir)) if folder}
+    check_outputs(inputs, [output], folders={folder: [] for folder in folders.values()})
+    if len({io.resolved(folder) for folder in folders.values()}) < len(folders):
+        raise click.UsageError(f"{', '.join(folders)} must name different folders")
+    for name, folder in folders.items():  # each replaced as a whole: nothing else in it
+        others = [f for f in folders.values() if f != folder]
+        check_outside(Path(folder), [*inputs, output, *others], f"{name} folder")
         try:
-            io.check_replaceable_folder(frames_dir, overwrite=overwrite, ours=frames.is_frame_file)
+            io.check_replaceable_folder(folder, overwrite=overwrite, ours=frames.is_frame_file)
         except OSError as exc:
             raise click.ClickException(str(exc)) from None
     if len(names) == 2 and all(Path(name).is_dir() for name in names):
@@ -87,6 +112,9 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
         frames.check_frame_rates(names, sources)
         fps = sources[0].get(cv2.CAP_PROP_FPS) or 10.0
         pairs = frames.FramePairs(names, sources)
+    if (depth_dir or cloud_dir) and not calib:
+        raise click.UsageError("--depth-frames and --cloud-frames need --calib (a rectified "
+                               "pair's calibration or a raw rig's)")
     stereo = StereoMatcher(max_disp=max_disp, min_disp=min_disp, config=config,
                            calib=list(calib) or None, temporal=temporal)
     count, start = 0, time.perf_counter()
@@ -96,7 +124,7 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
     full = 0  # frames that searched the whole range
     no_range = []  # frames written empty: no range found yet (dark, blank)
 
-    def pictures(frames_folder: Path | None):
+    def pictures(written: dict[str, Path]):
         nonlocal count, full
         total = len(pairs.paths) if isinstance(pairs, frames.FolderPairs) else None
         if max_frames is not None:
@@ -116,10 +144,8 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
                 low, high = stereo.range or result.search_range or (0, 1)
                 yield preview.video_frame(result.disparity, result.confidence, threshold,
                                           low, high, depth_scale(stereo.camera))
-                if frames_folder is not None:
-                    io.write_disparity(frames_folder / f"{count:06d}.pfm", result.disparity)
-                    io.write_confidence(frames_folder / f"{count:06d}_confidence.pfm",
-                                        result.confidence)
+                write_frame(written, f"{count:06d}", result, stereo, threshold, max_depth,
+                            depth_png)
                 count += 1
                 bar.update(1)
                 bar.set_postfix_str(f"{count / (time.perf_counter() - start):.2f} fps")
@@ -128,12 +154,15 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
 
     try:
         with io.all_or_none():  # the video and the frames folder together, or neither
-            staged = (io.staged_folder(frames_dir, overwrite=overwrite,
-                                               ours=frames.is_frame_file) if frames_dir
-                      else contextlib.nullcontext(None))
-            with staged as frames_folder:
+            with contextlib.ExitStack() as stack:
+                written = {name: stack.enter_context(io.staged_folder(
+                    folder, overwrite=overwrite, ours=frames.is_frame_file))
+                    for name, folder in folders.items()}
                 io.write_atomic(out, lambda tmp: _write_or_refuse(
-                    tmp, pictures(frames_folder), fps, out, left), silenced=False)
+                    tmp, pictures(written), fps, out, left), silenced=False)
+                if no_range and len(no_range) == count:  # nothing but empty frames
+                    raise click.ClickException(f"no frame of {left} gave a disparity range: "
+                                               f"{no_range[0]}")
         stopped = max_frames is not None and count >= max_frames
         unpaired = None if stopped else pairs.unpaired()
     finally:
@@ -146,8 +175,6 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
     rate = f", {count / seconds:.2f} fps" if count and seconds > 0 else ""
     searched = (f"; {full} searched the whole range, {count - full} near the last frame"
                 if temporal else "")
-    if no_range and len(no_range) == count:
-        raise click.ClickException(f"{no_range[0]} (no frame of {left} gave one)")
     echo(ctx, f"wrote {output} ({count} frames{rate}{searched})")
     if no_range:
         echo(ctx, f"warning: the first {len(no_range)} frame{'s' if len(no_range) > 1 else ''}"
@@ -162,6 +189,37 @@ def video(ctx, left, right, output, side_by_side, frames_dir, overwrite, max_dis
 def _write_or_refuse(tmp: str, pictures, fps: float, out: Path, left: str) -> None:
     if frames.write_video(tmp, pictures, fps, frames.VIDEO_CODECS[out.suffix.lower()]) == 0:
         raise click.ClickException(f"{left}: no frame could be read")
+
+
+#: The farthest depth a 16-bit PNG of depth x 1000 holds.
+PNG_DEPTH_LIMIT = 65.535
+
+
+def write_frame(written: dict[str, Path], stem: str, result, stereo: StereoMatcher,
+                threshold: float, max_depth: float | None, depth_png: bool) -> None:
+    """One frame's files in the folders asked for (``written``: option -> staged folder)."""
+    if "--frames" in written:
+        io.write_disparity(written["--frames"] / f"{stem}.pfm", result.disparity)
+        io.write_confidence(written["--frames"] / f"{stem}_confidence.pfm", result.confidence)
+    if "--depth-frames" not in written and "--cloud-frames" not in written:
+        return
+    kept = confidence.keep_confident(result.disparity, result.confidence, threshold)
+    if "--depth-frames" in written:
+        depth = geometry.depth_from_disparity(kept, stereo.camera)
+        if max_depth is not None:
+            depth[depth > max_depth] = np.inf
+        if depth_png:
+            known = np.isfinite(depth)
+            scaled = np.zeros(depth.shape, np.uint16)
+            scaled[known] = np.rint(depth[known] * 1000).astype(np.uint16)
+            io.imwrite_atomic(written["--depth-frames"] / f"{stem}.png", scaled)
+        else:
+            io.write_depth(written["--depth-frames"] / f"{stem}.pfm", depth)
+    if "--cloud-frames" in written:
+        points, colours = geometry.point_cloud(kept, stereo.views[0], stereo.camera,
+                                               max_depth=max_depth)
+        io.write_point_cloud(written["--cloud-frames"] / f"{stem}.ply",
+                             geometry.ply_vertices(points, colours))
 
 
 def depth_scale(camera):
