@@ -1,7 +1,10 @@
-"""The EuRoC clip (48 raw frames of a drone, ../shared/data/real-cameras/euroc-clip) through
-``vsmatch.StereoMatcher`` with its sensor.yaml pair, as ``vsmatch video cam0/ cam1/`` runs it:
-frames per second with and without the temporal mode beside SGBM on the same rectified
-frames, and a picture of frames side by side (left view above, disparity below).
+"""The EuRoC clip (48 raw frames of a drone, ../shared/data/real-cameras/euroc-clip) laid out
+as EuRoC ships it (``mav0/cam0/data/*.png``, ``data.csv``, ``sensor.yaml``; a temporary
+copy) and read as ``vsmatch video mav0/cam0 mav0/cam1`` reads it, through
+``vsmatch.StereoMatcher`` with the two sensor.yaml found there: frames per second with and
+without the temporal mode beside SGBM on the same rectified frames, and a picture of frames
+side by side (left view above, the video's frame below: pixels under the cloud's threshold
+dimmed, a colour bar in depth, metres).
 
     python scripts/euroc_clip.py [--data-root D] [--config fast] [--picture docs/euroc_clip.png]
 """
@@ -9,7 +12,9 @@ frames, and a picture of frames side by side (left view above, disparity below).
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -19,6 +24,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from vsmatch import io, preview  # noqa: E402
+from vsmatch.cli.video import depth_scale  # noqa: E402
 from vsmatch.frames import FolderPairs  # noqa: E402
 from vsmatch.matcher import StereoMatcher  # noqa: E402
 from vsmatch.peers import sgbm_matcher  # noqa: E402
@@ -33,19 +39,43 @@ def main() -> None:
     parser.add_argument("--picture", default=None)
     args = parser.parse_args()
     clip = Path(args.data_root) / "real-cameras" / "euroc-clip"
-    calib = [str(clip / "cam0" / "sensor.yaml"), str(clip / "cam1" / "sensor.yaml")]
-    frames = list(FolderPairs(str(clip / "cam0"), str(clip / "cam1")))
+    with tempfile.TemporaryDirectory() as folder:
+        mav0 = as_shipped(clip, Path(folder))
+        pairs = FolderPairs(str(mav0 / "cam0"), str(mav0 / "cam1"))
+        calib = pairs.sensor_files()
+        frames = list(pairs)
+        measure(frames, calib, args)
+
+
+def as_shipped(clip: Path, to: Path) -> Path:
+    """The clip's flattened cam0/ and cam1/ as EuRoC ships a camera: ``mav0/camN/data/``
+    (frames named by time stamp), ``data.csv`` (the index) and ``sensor.yaml``."""
+    for camera in ("cam0", "cam1"):
+        folder = to / "mav0" / camera
+        (folder / "data").mkdir(parents=True)
+        shutil.copy(clip / camera / "sensor.yaml", folder / "sensor.yaml")
+        lines = ["#timestamp [ns],filename"]
+        for frame in sorted((clip / camera).glob("*.png")):
+            shutil.copy(frame, folder / "data" / frame.name)
+            lines.append(f"{frame.stem},{frame.name}")
+        (folder / "data.csv").write_text("\n".join(lines) + "\n")
+    return to / "mav0"
+
+
+def measure(frames, calib, args) -> None:
     runs = {}
     for temporal in (False, True):
         matcher = StereoMatcher(config=args.config, calib=calib, temporal=temporal)
         matcher.compute(*frames[0])  # compiles, finds the range
         matcher = StereoMatcher(config=args.config, calib=calib, temporal=temporal)
-        out, seconds = [], []
+        out, seconds, confidences = [], [], []
         for left, right in frames:
             start = time.perf_counter()
-            out.append(matcher.compute(left, right))
+            result = matcher.result(left, right)
             seconds.append(time.perf_counter() - start)
-        runs[temporal] = (matcher, out, seconds)
+            out.append(result.disparity)
+            confidences.append(result.confidence)
+        runs[temporal] = (matcher, out, seconds, confidences)
     matcher = runs[True][0]
     low, high = matcher.range
     rectified = [matcher.rectify(left, right) for left, right in frames]
@@ -62,7 +92,7 @@ def main() -> None:
     size = rectified[0][0].shape[1::-1]
     print(f"EuRoC clip: {len(frames)} frames of {size[0]}x{size[1]}, disparities {low}..{high}, "
           f"config {args.config}; frames per second after the first:")
-    for temporal, (_, out, seconds) in runs.items():
+    for temporal, (_, out, seconds, _) in runs.items():
         changes = [np.abs(b - a)[np.isfinite(a) & np.isfinite(b)] for a, b in zip(out, out[1:])]
         moving = 100 * np.mean([np.mean(c > 1) for c in changes])
         label = "temporal" if temporal else "per frame"
@@ -74,7 +104,12 @@ def main() -> None:
         shown = np.linspace(0, len(frames) - 1, SHOWN).round().astype(int)
         views = [cv2.cvtColor(rectified[k][0], cv2.COLOR_GRAY2BGR)
                  if rectified[k][0].ndim == 2 else rectified[k][0] for k in shown]
-        disps = [preview.colour_disparity(runs[True][1][k], high, low) for k in shown]
+        camera, threshold = matcher.camera, matcher.config.cloud.min_confidence
+        disps = [preview.video_frame(runs[True][1][k], runs[True][3][k], threshold, low, high,
+                                     depth_scale(camera)) for k in shown]
+        width = disps[0].shape[1]
+        views = [cv2.copyMakeBorder(v, 0, 0, 0, width - v.shape[1], cv2.BORDER_CONSTANT,
+                                    value=(255, 255, 255)) for v in views]
         picture = np.vstack([np.hstack(views), np.hstack(disps)])
         scale = min(1.0, 1600 / picture.shape[1])
         picture = cv2.resize(picture, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)

@@ -120,7 +120,10 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
     labels = None
     if cfg.consistency.enabled:
         with stage("consistency"):
-            labels = disparity.left_right_check(disp_l, disp_r, n_disp=n_disp,
+            # A held pixel is not checked (it is VALID below): its right partner was not
+            # searched, and the scan for any passing disparity would find none, slowly.
+            checked = disp_l if held is None else np.where(held, -1, disp_l)
+            labels = disparity.left_right_check(checked, disp_r, n_disp=n_disp,
                                                 tolerance=cfg.consistency.tolerance)
         if held is not None:
             labels[held] = disparity.VALID

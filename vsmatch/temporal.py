@@ -108,7 +108,9 @@ def plan(memory: Memory, grey: np.ndarray, grey_right: np.ndarray, max_disp: int
     if max(left_changed.mean(), right_changed.mean()) > cfg.scene_change:
         return "cut", None
     # A left pixel is still only if what it matched in the right view is still too.
-    moved = grown(left_changed | seen_from_left(right_changed, memory.disparity), cfg.motion)
+    if right_changed.any():
+        left_changed |= seen_from_left(right_changed, memory.disparity)
+    moved = grown(left_changed, cfg.motion)
     bands = bands_from_previous(memory, moved, cfg)
     unseen = (bands.count == 0) & ~np.isfinite(bands.held)
     if unseen.mean() > cfg.unseen:
@@ -229,8 +231,9 @@ HISTOGRAM_BINS = 32
 
 def histogram_distance(a: np.ndarray, b: np.ndarray) -> float:
     """Total variation between two views' grey-level histograms (0: the same, 1: apart)."""
-    h = [np.bincount(np.clip(v, 0, 255).astype(np.uint8).ravel() // (256 // HISTOGRAM_BINS),
-                     minlength=HISTOGRAM_BINS) / v.size for v in (a, b)]
+    # As whole grey levels (uint8, saturated): OpenCV counts those fast.
+    h = [cv2.calcHist([cv2.convertScaleAbs(v)], [0], None, [HISTOGRAM_BINS], [0, 256]).ravel()
+         / v.size for v in (a, b)]
     return 0.5 * float(np.abs(h[0] - h[1]).sum())
 
 
