@@ -22,6 +22,7 @@ from .main import main
     "vsmatch video left.mp4 right.mp4 -o disparity.avi --calib stereo.yaml",
     "vsmatch video both.mp4 --side-by-side -o d.mp4 --frames frames/",
     "vsmatch video 0 1 -o live.avi --calib stereo.yaml --config fast",
+    "vsmatch video mav0/cam0 mav0/cam1 -o drone.avi --depth-frames depth/",
     "vsmatch video cam0/ cam1/ -o d.avi --calib cam0/sensor.yaml --calib cam1/sensor.yaml"))
 @click.argument("left")
 @click.argument("right", required=False)
@@ -68,10 +69,14 @@ from .main import main
 def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_png, cloud_dir,
           max_depth, overwrite, max_disp, min_disp, calib, max_frames, temporal, config):
     """Match the frames of two videos (or of one side-by-side video, of two cameras
-    given by index, or of two folders of frames paired by file name, as EuRoC's cam0/
-    and cam1/) and write the disparity as a colour video.
+    given by index, or of two folders of frames, in the order of the number in their
+    names and paired by name or time stamp; EuRoC's mav0/cam0 and mav0/cam1 as they
+    ship, their sensor.yaml found there) and write the disparity as a colour video:
+    pixels under the config's cloud threshold dimmed, a colour bar (depths with a
+    calibration).
 
-    Frames of one video without a partner in the other are counted as failed (exit 1).
+    Frames of one video without a partner in the other are counted as failed (exit 1);
+    files that are not images and frames that cannot be read are skipped with a word.
     """
     from tqdm import tqdm
 
