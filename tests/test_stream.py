@@ -5,14 +5,9 @@ import numpy as np
 import pytest
 
 import vsmatch
+from test_temporal import noisy  # each view its own sensor noise, sigma = 2
 from vsmatch import datasets, metrics
 from vsmatch.matcher import StereoMatcher
-
-NOISE = 2.0
-
-
-def noisy(view, rng):
-    return np.clip(np.round(view + rng.normal(0, NOISE, view.shape)), 0, 255).astype(np.uint8)
 
 
 @pytest.fixture(scope="module")

@@ -20,7 +20,6 @@ from .main import main
 
 @main.command(epilog=examples(
     "vsmatch video left.mp4 right.mp4 -o disparity.avi --calib stereo.yaml",
-    "vsmatch video both.mp4 --side-by-side -o d.mp4 --frames frames/",
     "vsmatch video 0 1 -o live.avi --calib stereo.yaml --config fast",
     "vsmatch video mav0/cam0 mav0/cam1 -o drone.avi --depth-frames depth/",
     "vsmatch video cam0/ cam1/ -o d.avi --calib cam0/sensor.yaml --calib cam1/sensor.yaml"))
