@@ -179,3 +179,19 @@ def test_grey_and_colour_frames_mix_in_one_stream(scene, rng):
         reasons.append(matcher.temporal.reason)
     assert reasons == ["first frame", None, "new size, channels or range", None,
                        "new size, channels or range"]
+
+
+def test_a_stream_can_leave_the_bands_scanline_and_aggregation_out(scene, rng):
+    """temporal.scanline / temporal.aggregation false: a frame searched near the last one
+    runs without those stages (faster; the full search keeps them)."""
+    import dataclasses
+
+    cfg = vsmatch.load_config("fast")
+    lean = dataclasses.replace(cfg, temporal=dataclasses.replace(
+        cfg.temporal, scanline=False, aggregation=False))
+    clip = [(noisy(scene.left, rng), noisy(scene.right, rng)) for _ in range(2)]
+    for config, stages in ((cfg, {"scanline", "aggregation"}), (lean, set())):
+        out, reasons = stream(clip, scene.max_disp, config)
+        assert reasons == ["first frame", None]
+        assert {"scanline", "aggregation"} <= set(out[0].seconds)
+        assert stages == {"scanline", "aggregation"} & set(out[1].seconds)

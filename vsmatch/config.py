@@ -471,6 +471,10 @@ class TemporalConfig:
     planes: bool = _param(False, doc=(
         "Fit slanted planes on frames searched near the last one too (the held pixels "
         "keep the last full search's)."))
+    scanline: bool = _param(True, doc=(
+        "The scanline optimisation over a frame's bands (where the config's bands have it)."))
+    aggregation: bool = _param(True, doc=(
+        "Cross aggregation over a frame's bands (where the config's bands have it)."))
     collapse: float = _param(0.7, 0.0, 1.0, doc=(
         "A full search again when a frame's mean confidence falls below this share of the "
         "last full search's."))

@@ -111,6 +111,9 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int,
     cfg = memory.config
     if not cfg.temporal.planes:
         cfg = dataclasses.replace(cfg, planes=dataclasses.replace(cfg.planes, enabled=False))
+    cfg = dataclasses.replace(cfg, bands=dataclasses.replace(
+        cfg.bands, scanline=cfg.bands.scanline and cfg.temporal.scanline,
+        aggregation=cfg.bands.aggregation and cfg.temporal.aggregation))
     seconds: dict[str, float] = {}
     if memory.correction is not None:
         with timed(seconds, "photometric"):
