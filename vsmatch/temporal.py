@@ -205,11 +205,6 @@ def seen_from_left(right_mask: np.ndarray, disparity: np.ndarray) -> np.ndarray:
     return np.take_along_axis(right_mask, match, axis=1)
 
 
-def changed(previous: np.ndarray, grey: np.ndarray, cfg: TemporalConfig) -> np.ndarray:
-    """Where the left view changed since the last frame, grown by ``motion`` pixels."""
-    return grown(changed_pixels(previous, grey, cfg), cfg.motion)
-
-
 def full_search_reason(memory: Memory, grey: np.ndarray, grey_right: np.ndarray,
                        max_disp: int, cfg: TemporalConfig) -> str | None:
     """Why this frame searches the whole range whatever its pixels show, or None."""
