@@ -222,6 +222,9 @@ def scanline_rows(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, wei
             prev_n = np.int64(-1)
             for step in range(width):
                 x = start + direction * step
+                if banded and count[y, x] <= 0:  # no band: the path restarts after it
+                    prev_n = np.int64(-1)
+                    continue
                 now = step % 2
                 # The edge crossed from the previous pixel: stored at the later of the two.
                 ex = x if direction == 1 else x + 1
@@ -261,6 +264,9 @@ def scanline_columns(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, 
                 cur_bits = cur.view(np.int32)
                 for k in range(n):
                     x = x0 + k
+                    if banded and count[y, x] <= 0:  # no band: the path restarts after it
+                        prev_n[k] = -1
+                        continue
                     prev_lo[k], prev_n[k], mins[k] = _walk_step(
                         banded, cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
                         False, y, x, ey, x, prev_lo[k], prev_n[k], mins[k], prev[k], cur[k],
@@ -300,6 +306,9 @@ def scanline_diagonal_pass(cost, lo, count, banded, change_l, change_r_rev, p1s,
                 i = start + direction * step
                 y = y0 + i
                 x = x0 + i * step_x
+                if banded and count[y, x] <= 0:  # no band: the path restarts after it
+                    prev_n = np.int64(-1)
+                    continue
                 now = step % 2
                 # The edge crossed is stored at the later pixel of the two, top to bottom.
                 ey = y if direction == 1 else y + 1
