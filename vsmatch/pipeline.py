@@ -118,7 +118,10 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int,
     if memory.correction is not None:
         with timed(seconds, "photometric"):
             right = photometric.apply(right, memory.correction)
-    learnt = _learn(left, right, cfg, memory.colour_weight, seconds)
+    # The noise the last full search measured: a stream's noise changes with its light,
+    # which a jump in exposure or a refresh searches again for (2.7 ms a frame at 640x480).
+    learnt = Learnt(noise_sigma=memory.noise_sigma, width=left.shape[1],
+                    colour_weight=memory.colour_weight)
     result = scale.in_stripes(functools.partial(solve, learnt=learnt), left, right, max_disp,
                               cfg, near.bands)
     result.seconds = {**seconds, **result.seconds}

@@ -23,6 +23,7 @@ import cv2
 import numpy as np
 
 from . import bands as band_tools
+from ._kernels import temporal as _k
 from .config import Config, TemporalConfig
 
 #: The window over which a pixel's change between frames is averaged (noise cancels).
@@ -47,6 +48,7 @@ class Memory:
     config: Config  # the config of the stream
     correction: object  # photometric.Correction or None
     colour_weight: float  # the colour term's weight after the exposure correction
+    noise_sigma: float | None  # the views' noise the last full search measured
     full_confidence: float  # the mean confidence of the last full search
     since_full: int = 0
 
@@ -105,7 +107,7 @@ def plan(memory: Memory, grey: np.ndarray, grey_right: np.ndarray, max_disp: int
     right_changed = changed_pixels(memory.grey_right, grey_right, cfg)
     # A view mostly changed is a new scene for that camera (dead, frozen against a moving
     # other, moved on its mount, cut to a look-alike scene): nothing held can be trusted.
-    if max(left_changed.mean(), right_changed.mean()) > cfg.scene_change:
+    if max(_share(left_changed), _share(right_changed)) > cfg.scene_change:
         return "cut", None
     # A left pixel is still only if what it matched in the right view is still too.
     if right_changed.any():
@@ -113,9 +115,14 @@ def plan(memory: Memory, grey: np.ndarray, grey_right: np.ndarray, max_disp: int
     moved = grown(left_changed, cfg.motion)
     bands = bands_from_previous(memory, moved, cfg)
     unseen = (bands.count == 0) & ~np.isfinite(bands.held)
-    if unseen.mean() > cfg.unseen:
+    if _share(unseen) > cfg.unseen:
         return "new view", None
     return None, Plan(memory, moved, bands)
+
+
+def _share(mask: np.ndarray) -> float:
+    """The share of ``mask`` that holds (a boolean mean without the float copy)."""
+    return np.count_nonzero(mask) / mask.size
 
 
 #: Below this phase-correlation peak the views' shift is not trusted (taken as none).
@@ -240,28 +247,16 @@ def bands_from_previous(memory: Memory, moved: np.ndarray, cfg: TemporalConfig
     searched again around the last full search's (the anchor's 3 x 3 range): around its
     own last value it walked a pixel a frame on a still view (29 frames of 200 x 150: bad
     1.0 7.6 -> 10.7), and over the motion window it jumped between frames (KITTI's still
-    road D1 9.80, around itself 9.60, per frame 9.44; scripts/video_bench.py)."""
-    previous = memory.disparity
-    low, high = band_tools.extremes(previous, 3)
-    unsure = (memory.confidence < cfg.unsure) & ~moved
-    anchor_low, anchor_high = band_tools.extremes(memory.anchor, 3)
-    anchored = unsure & np.isfinite(anchor_low)
-    low = np.where(anchored, anchor_low, low)
-    high = np.where(anchored, anchor_high, high)
-    if cfg.motion > 0 and moved.any():
-        low_far, high_far = band_tools.extremes(previous, 2 * cfg.motion + 1)
-        low = np.where(moved, low_far, low)
-        high = np.where(moved, high_far, high)
-    with np.errstate(invalid="ignore"):
-        centre = np.where(anchored & np.isfinite(memory.anchor), memory.anchor, previous)
-        centre = np.where(np.isfinite(centre), centre, (low + high) / 2)
-        bands = band_tools.around(low - cfg.band, high + cfg.band, centre,
-                                  memory.max_disp + 1, cfg.max_band)
-    # Still, sure pixels are not searched again: they keep the last disparity, and serve
-    # the searched ones as consistent neighbours.
-    held = ~moved & ~unsure & np.isfinite(previous)
-    bands.count[held] = 0
-    return dataclasses.replace(bands, held=np.where(held, previous, np.inf).astype(np.float32))
+    road D1 9.80, around itself 9.60, per frame 9.44; scripts/video_bench.py). Where the
+    band would be wider than ``max_band``, the ``max_band`` centred on the estimate."""
+    shape = memory.disparity.shape
+    lo, count = np.empty(shape, np.int32), np.empty(shape, np.int32)
+    held = np.empty(shape, np.float32)
+    n_disp = memory.max_disp + 1
+    _k.bands_from_previous(memory.disparity, memory.anchor, memory.confidence,
+                           np.ascontiguousarray(moved), np.float32(cfg.unsure), cfg.motion,
+                           cfg.band, n_disp, cfg.max_band, lo, count, held)
+    return band_tools.Bands(lo, count, int(min(cfg.max_band, n_disp)), n_disp, held)
 
 
 def hold(near: Plan, new: np.ndarray, cfg: TemporalConfig) -> np.ndarray:
@@ -269,17 +264,18 @@ def hold(near: Plan, new: np.ndarray, cfg: TemporalConfig) -> np.ndarray:
     the way to the new one (and kept where the new frame has none); elsewhere the new one.
     A still pixel searched again (an unsure one) starts from the last full search's
     estimate, not from its own last value: frame after frame the averages would carry it
-    wherever the narrower search leans (the error of a still view rising 0.9 -> 1.4)."""
+    wherever the narrower search leans (the error of a still view rising 0.9 -> 1.4). A
+    held pixel's new value is its last one already."""
     memory, moved = near.memory, near.moved
-    previous = np.where(near.bands.count > 0, memory.anchor, memory.disparity)
-    previous = np.where(np.isfinite(previous), previous, memory.disparity)
-    out = new.copy()
-    still = ~moved & np.isfinite(previous)
-    both = still & np.isfinite(new)
+    searched_still = (near.bands.count > 0) & ~moved
+    last = np.where(np.isfinite(memory.anchor), memory.anchor, memory.disparity)[searched_still]
+    fresh = new[searched_still]
     keep = np.float32(cfg.hold)
-    out[both] = previous[both] + (1 - keep) * (new[both] - previous[both])
-    lost = still & ~np.isfinite(new)
-    out[lost] = previous[lost]
+    with np.errstate(invalid="ignore"):
+        # A new estimate moves part of the way; none keeps the last; none before takes it.
+        mixed = np.where(np.isfinite(fresh), last + (1 - keep) * (fresh - last), last)
+    out = new.copy()
+    out[searched_still] = np.where(np.isfinite(last), mixed, fresh)
     return out
 
 
@@ -293,7 +289,8 @@ def remember(result, grey: np.ndarray, grey_right: np.ndarray, max_disp: int,
         curve = {name: values.copy() for name, values in result.curve.items()}
         return Memory(grey.shape, int(max_disp), disparity, confidence, grey, grey_right,
                       disparity.copy(), curve, config, result.photometric,
-                      result.colour_weight, float(result.confidence.mean()))
+                      result.colour_weight, result.noise_sigma,
+                      float(result.confidence.mean()))
     memory = plan.memory
     anchor = np.where(plan.moved, disparity, memory.anchor)
     return dataclasses.replace(memory, disparity=disparity, confidence=confidence, grey=grey,
