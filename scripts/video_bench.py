@@ -3,6 +3,7 @@ describes, against per-frame matching and OpenCV SGBM in one run.
 
     python scripts/video_bench.py [--data-root D] [--config default --config fast]
                                   [--frames 8] [--json out.json] [--quick] [--checks]
+                                  [--speed] [--scene DATASET/NAME ...]
 
 Clips are made from real pairs with ground truth, each view with its own sensor noise
 (Gaussian, sigma = 2 grey levels, a new draw every frame, a fixed seed):
@@ -274,6 +275,9 @@ def main() -> None:
                         help="What a stream must survive, instead (module docstring).")
     parser.add_argument("--speed", action="store_true",
                         help="Only the frame rates at 640x480 and 1280x720.")
+    parser.add_argument("--scene", action="append", default=None, metavar="DATASET/NAME",
+                        help="The still and sliding clips of these scenes instead of SCENES "
+                             "(with --quick: no frame rates at size).")
     args = parser.parse_args()
     configs = args.config or ["default", "fast"]
     if args.checks:
@@ -286,7 +290,8 @@ def main() -> None:
     for _, run in rows:  # compile every kernel before anything is timed
         run([(warm.left, warm.right)] * 3, warm.max_disp)
     report = {"still": {}, "sliding": {}, "cut": {}, "sizes": {}}
-    scenes = [] if args.speed else SCENES[:1] if args.quick else SCENES
+    chosen = [tuple(scene.split("/", 1)) for scene in args.scene or []]
+    scenes = [] if args.speed else chosen or (SCENES[:1] if args.quick else SCENES)
     for kind, name in scenes:
         scene = datasets.load_dataset(kind, args.data_root, names=[name])[0]
         for clip_name, make in (("still", still_clip), ("sliding", sliding_clip)):
