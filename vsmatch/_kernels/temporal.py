@@ -32,9 +32,12 @@ def bands_from_previous(previous, anchor, confidence, moved, unsure, motion, ban
             last = previous[y, x]
             was_moved = moved[y, x]
             is_unsure = confidence[y, x] < unsure and not was_moved
-            # Still and sure: kept, not searched (its band is made all the same).
-            keeps = not was_moved and not is_unsure and np.isfinite(last)
-            held[y, x] = last if keeps else np.inf
+            if not was_moved and not is_unsure and np.isfinite(last):
+                lo[y, x] = 0  # still and sure: kept, not searched
+                count[y, x] = 0
+                held[y, x] = last
+                continue
+            held[y, x] = np.inf
             low, high = _extremes(previous, y, x, 1)
             centre = last
             if is_unsure:
@@ -61,4 +64,4 @@ def bands_from_previous(previous, anchor, confidence, moved, unsure, motion, ban
                 first = min(max(middle, 0), max(n_disp - max_band, 0))
                 n = width_band
             lo[y, x] = np.int32(first)
-            count[y, x] = 0 if keeps else np.int32(n)
+            count[y, x] = np.int32(n)
