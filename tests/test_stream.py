@@ -195,3 +195,39 @@ def test_a_stream_can_leave_the_bands_scanline_and_aggregation_out(scene, rng):
         assert reasons == ["first frame", None]
         assert {"scanline", "aggregation"} <= set(out[0].seconds)
         assert stages == {"scanline", "aggregation"} & set(out[1].seconds)
+
+
+def test_a_right_camera_that_freezes_while_the_rig_pans_is_a_change(scene, rng):
+    """The rig pans 3 px a frame; the right camera's picture stops at the second frame: the
+    left view alone moves as the memory does, so only the right view tells."""
+    width = scene.left.shape[1]
+    w = int(0.8 * width)
+    clip = [(noisy(scene.left[:, x:x + w], rng), noisy(scene.right[:, x:x + w], rng))
+            for x in (0, 3, 6)]
+    clip[2] = clip[2][0], clip[1][1]  # the right view of frame 2 again
+    out, reasons = stream(clip, scene.max_disp)
+    assert reasons[1] is None and reasons[2] == "cut"
+    alone = vsmatch.match(*clip[2], max_disp=scene.max_disp)
+    assert out[2].disparity.tobytes() == alone.tobytes()
+
+
+def test_a_moving_object_on_a_still_background_leaves_no_trail():
+    """A textured square 8 px near the camera moves 4 px a frame across a still wall 3 px
+    away: where it was, the wall comes back at once."""
+    rng = np.random.default_rng(3)
+    height, width = 96, 160
+    wall = rng.integers(0, 256, (height, width + 16, 3), np.uint8)
+    square = rng.integers(0, 256, (32, 32, 3), np.uint8)
+    clip = []
+    for k in range(5):
+        left, right = wall[:, :width].copy(), wall[:, 3:3 + width].copy()
+        x = 40 + 4 * k
+        left[32:64, x:x + 32] = square
+        right[32:64, x - 8:x + 24] = square  # 8 px of disparity
+        clip.append((left, right))
+    out, reasons = stream(clip, 16)
+    assert reasons[1:] == [None] * 4  # each frame searched near the last
+    last = out[-1].disparity
+    uncovered = last[36:60, 44:52]  # the square's first place, wall again since frame 3
+    assert np.mean(np.abs(uncovered - 3) < 1) > 0.9
+    assert np.mean(np.abs(last[36:60, 62:84] - 8) < 1) > 0.9  # the square where it is now
