@@ -23,8 +23,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vsmatch import io, preview  # noqa: E402
-from vsmatch.cli.video import depth_scale  # noqa: E402
+from vsmatch import geometry, io, preview  # noqa: E402
 from vsmatch.frames import FolderPairs  # noqa: E402
 from vsmatch.matcher import StereoMatcher  # noqa: E402
 from vsmatch.peers import sgbm_matcher  # noqa: E402
@@ -106,7 +105,7 @@ def measure(frames, calib, args) -> None:
                  if rectified[k][0].ndim == 2 else rectified[k][0] for k in shown]
         camera, threshold = matcher.camera, matcher.config.cloud.min_confidence
         disps = [preview.video_frame(runs[True][1][k], runs[True][3][k], threshold, low, high,
-                                     depth_scale(camera)) for k in shown]
+                                     geometry.depth_of(camera)) for k in shown]
         width = disps[0].shape[1]
         views = [cv2.copyMakeBorder(v, 0, 0, 0, width - v.shape[1], cv2.BORDER_CONSTANT,
                                     value=(255, 255, 255)) for v in views]

@@ -225,6 +225,14 @@ def depth_from_disparity(disp: np.ndarray, calib: Calibration) -> np.ndarray:
     return depth
 
 
+def depth_of(calib: Calibration | None):
+    """``d -> f B / (d + doffs)`` for one disparity (``inf`` at or beyond infinity), or
+    None without a calibration: a colour bar's labels in depth."""
+    if calib is None:
+        return None
+    return lambda d: float(depth_from_disparity(np.array([[d]], np.float32), calib)[0, 0])
+
+
 def point_cloud(disp: np.ndarray, image: np.ndarray, calib: Calibration, *,
                 max_depth: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The 3D points of the valid pixels, in the left camera's frame, and their colours.

@@ -147,7 +147,7 @@ def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_p
                 full += stereo.temporal is None or stereo.temporal.reason is not None
                 low, high = stereo.range or result.search_range or (0, 1)
                 yield preview.video_frame(result.disparity, result.confidence, threshold,
-                                          low, high, depth_scale(stereo.camera))
+                                          low, high, geometry.depth_of(stereo.camera))
                 write_frame(written, f"{count:06d}", result, stereo, threshold, max_depth,
                             depth_png)
                 count += 1
@@ -224,11 +224,3 @@ def write_frame(written: dict[str, Path], stem: str, result, stereo: StereoMatch
                                                max_depth=max_depth)
         io.write_point_cloud(written["--cloud-frames"] / f"{stem}.ply",
                              geometry.ply_vertices(points, colours))
-
-
-def depth_scale(camera):
-    """Disparity -> depth in the calibration's unit (None without one), for the bar."""
-    if camera is None:
-        return None
-    return lambda d: camera.focal * camera.baseline / (d + camera.doffs) if (
-        d + camera.doffs) > 0 else np.inf
