@@ -105,20 +105,22 @@ def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_p
             io.check_replaceable_folder(folder, overwrite=overwrite, ours=frames.is_frame_file)
         except OSError as exc:
             raise click.ClickException(str(exc)) from None
-    if len(names) == 2 and all(Path(name).is_dir() for name in names):
-        sources, pairs = [], frames.FolderPairs(*names)
-        fps = pairs.fps() or 10.0
+    folder_pairs = len(names) == 2 and all(Path(name).is_dir() for name in names)
+    if folder_pairs:
+        pairs = frames.FolderPairs(*names)
         if not calib and pairs.sensor_files():  # EuRoC's cameras carry their calibration
             calib = pairs.sensor_files()
             echo(ctx, f"calibration: {calib[0]} and {calib[1]}")
+    if (depth_dir or cloud_dir) and not calib:
+        raise click.UsageError("--depth-frames and --cloud-frames need --calib (a rectified "
+                               "pair's calibration or a raw rig's)")
+    if folder_pairs:
+        sources, fps = [], pairs.fps() or 10.0
     else:
         sources = [frames.open_source(name) for name in names]
         frames.check_frame_rates(names, sources)
         fps = sources[0].get(cv2.CAP_PROP_FPS) or 10.0
         pairs = frames.FramePairs(names, sources)
-    if (depth_dir or cloud_dir) and not calib:
-        raise click.UsageError("--depth-frames and --cloud-frames need --calib (a rectified "
-                               "pair's calibration or a raw rig's)")
     stereo = StereoMatcher(max_disp=max_disp, min_disp=min_disp, config=config,
                            calib=list(calib) or None, temporal=temporal)
     count, start = 0, time.perf_counter()
