@@ -107,16 +107,19 @@ def _indexed_frames(data: Path, index: Path) -> tuple[dict, list[str]]:
 NANOSECOND_DIGITS = 16
 
 
+def nanosecond_stamps(keys: list) -> bool:
+    """Whether every :func:`frame_key` is a time stamp in nanoseconds."""
+    return bool(keys) and all(k[0] == 0 and k[1] >= 10 ** (NANOSECOND_DIGITS - 1)
+                              for k in keys)
+
+
 def paired_keys(lefts: list, rights: list) -> list[tuple]:
     """Left and right frames of one moment, in time order: the same key; between time
     stamps in nanoseconds, the nearest within a quarter of the frame step (two cameras'
     clocks seldom stamp a moment alike)."""
     rights_set = set(rights)
     pairs = [(k, k) for k in lefts if k in rights_set]
-    stamps = [k[1] for k in lefts] + [k[1] for k in rights]
-    if len(pairs) == len(lefts) or not all(
-            k[0] == 0 for k in lefts + rights) or min(stamps, default=0) < 10 ** (
-            NANOSECOND_DIGITS - 1):
+    if len(pairs) == len(lefts) or not nanosecond_stamps(lefts + rights):
         return pairs
     left_stamps = np.array([k[1] for k in lefts], np.int64)
     right_stamps = np.array([k[1] for k in rights], np.int64)
@@ -171,8 +174,7 @@ class FolderPairs:
 
     def fps(self) -> float:
         stamps = [k[1] for k, _ in self.keys]
-        if len(stamps) < 2 or not all(k[0] == 0 for k, _ in self.keys) or min(
-                stamps) < 10 ** (NANOSECOND_DIGITS - 1):
+        if len(stamps) < 2 or not nanosecond_stamps([k for k, _ in self.keys]):
             return 0.0
         step = float(np.median(np.diff(stamps)))
         return 1e9 / step if step > 0 else 0.0

@@ -214,9 +214,8 @@ def seen_from_left(right_mask: np.ndarray, disparity: np.ndarray) -> np.ndarray:
 
 def full_search_reason(memory: Memory, grey: np.ndarray, grey_right: np.ndarray,
                        max_disp: int, cfg: TemporalConfig) -> str | None:
-    """Why this frame searches the whole range whatever its pixels show, or None."""
-    if memory.shape != grey.shape or memory.max_disp != max_disp:
-        return "new size, channels or range"
+    """Why this frame searches the whole range whatever its pixels show, or None (views
+    of another size or range have no memory: :meth:`Temporal.follow`)."""
     if memory.since_full + 1 >= cfg.refresh:
         return "refresh"
     pairs = ((memory.grey, grey), (memory.grey_right, grey_right))

@@ -56,6 +56,7 @@ def bands_from_previous(previous, anchor, confidence, moved, unsure, motion, ban
                 lo[y, x] = 0
                 count[y, x] = 0
                 continue
+            # Placed as vsmatch.bands.around places a band (keep the two alike).
             first = min(max(np.floor(low), 0), n_disp - 1)
             last_d = min(max(np.ceil(high), 0), n_disp - 1)
             n = last_d - first + 1
