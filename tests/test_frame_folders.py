@@ -265,3 +265,10 @@ def test_depth_and_cloud_frames_refused_before_the_work(tmp_path, rng, monkeypat
     result = invoke("video", left, right, "-o", "d.avi", "--max-disp", 8, *extra)
     assert result.exit_code == 2 and said in result.output, result.output
     assert not (tmp_path / "d.avi").exists() and not (tmp_path / "z").exists()
+
+
+def test_a_folder_beside_a_missing_one_names_the_missing_one(tmp_path, rng):
+    left, _ = write_folders(tmp_path, rng, ["0.png"])
+    result = invoke("video", left, tmp_path / "nosuch", "-o", tmp_path / "d.avi")
+    assert result.exit_code == 1 and "nosuch: file not found" in result.output, result.output
+    assert not (tmp_path / "d.avi").exists()

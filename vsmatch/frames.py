@@ -33,7 +33,7 @@ def open_source(source: str) -> cv2.VideoCapture:
                                    f"{MAX_CAMERA_INDEX})")
     if not camera and Path(source).is_dir():
         raise FrameSourceError(f"{source}: a folder; give two folders of frames (LEFT "
-                                   "and RIGHT, frames paired by name)")
+                                   "and RIGHT, frames paired by name or time stamp)")
     if not camera and not Path(source).is_file():
         raise FrameSourceError(f"{source}: file not found")
     with io.native_stderr_silenced():

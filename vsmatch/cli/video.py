@@ -117,6 +117,9 @@ def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_p
     if folder_pairs:
         sources, fps = [], pairs.fps() or 10.0
     else:
+        for name in names:  # a missing one named before a folder beside it is blamed
+            if not name.isdigit() and not Path(name).exists():
+                raise frames.FrameSourceError(f"{name}: file not found")
         sources = [frames.open_source(name) for name in names]
         frames.check_frame_rates(names, sources)
         fps = sources[0].get(cv2.CAP_PROP_FPS) or 10.0
