@@ -1,10 +1,10 @@
-"""Time the two aggregation methods pass by pass on middlebury2, to set the rule that
-chooses between them (vsmatch.aggregation.direct_is_faster).
+"""Time the two ways of summing over the crosses, running sums (orthogonal integral
+images, the library's) and direct sums, on the standard pairs.
 
-    python scripts/aggregation_methods.py [--data-root DIR]
+    python scripts/aggregation_methods.py [--data-root DIR] [--config NAME]
 
-Prints, per scene and pass, the mean arm length along the pass, the milliseconds of
-running sums and of direct sums (median of 7), and what the rule chooses.
+Prints, per pair, the volume's shape, the mean arm length and the milliseconds of one
+aggregation of the config's cost volume by each method (fastest of 3), then the totals.
 """
 from __future__ import annotations
 
@@ -13,55 +13,48 @@ import time
 
 import numpy as np
 
-from vsmatch import aggregation, cost, datasets, sensitivity
-from vsmatch._kernels.aggregate import sum_along_arms, sum_over_arms
+from vsmatch import aggregation, bench, level
 from vsmatch.config import load_config
-from vsmatch.images import mirrored, to_grey
 
 
-def median_ms(fn, repeats=7):
+def fastest_ms(fn, repeats: int = 3) -> float:
+    fn()
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
         fn()
         times.append(time.perf_counter() - start)
-    return 1000 * float(np.median(times))
+    return 1000 * min(times)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data-root", default=None)
-    parser.add_argument("--dataset", action="append", default=None,
-                        help="datasets to time (repeatable; default middlebury2)")
+    parser.add_argument("--config", default="default")
     args = parser.parse_args()
-    names = args.dataset or ["middlebury2"]
-    scenes = [s for name in names for s in datasets.load_dataset(name, args.data_root)]
-    cfg = load_config("default")
-    print(f"{'scene':12s} {'pass':12s} {'arm':>5s} {'running':>8s} {'direct':>8s}  rule")
-    for scene in scenes:
-        n_disp = scene.max_disp + 1
-        grey_l, grey_r = to_grey(scene.left), to_grey(scene.right)
-        grad_l, theta_l = sensitivity.visual_sensitivity(grey_l)
-        grad_r, theta_r = sensitivity.visual_sensitivity(grey_r)
-        volume = cost.cost_volume(scene.left, scene.right, cost.census_transform(grey_l),
-                                  cost.census_transform(grey_r), grad_l, grad_r,
-                                  n_disp=n_disp, cfg=cfg.cost)
+    cfg = load_config(args.config)
+    totals = dict.fromkeys(aggregation.AGGREGATION_METHODS, 0.0)
+    print(f"{'pair':12s} {'volume':>16s} {'arm':>5s}" +
+          "".join(f"{m:>9s}" for m in totals))
+    for scene, _ in bench.standard_pairs(args.data_root):
+        volume, (grad_l, theta_l), (grad_r, theta_r) = level.matching_costs(
+            scene.left, scene.right, scene.max_disp + 1, cfg.cost, cfg.arms.kappa != 0)
         arms_l = aggregation.cross_arms(scene.left, theta_l, grad_l, cfg.arms)
         arms_r = aggregation.cross_arms(scene.right, theta_r, grad_r, cfg.arms)
-        arms_r_rev = mirrored(arms_r, pad=n_disp, fill=255)  # as aggregate_cross gives them
-        out = np.empty_like(volume)
-        for along_rows in (True, False):
-            axes = (0, 1) if along_rows else (2, 3)
-            mean_arm = float(arms_l[axes[0]].mean() + arms_l[axes[1]].mean())
-            for normalise in (False, True):
-                running = median_ms(lambda: sum_along_arms(volume, arms_l, arms_r_rev, along_rows,
-                                                           normalise, out))
-                direct = median_ms(lambda: sum_over_arms(volume, arms_l, arms_r_rev,
-                                                         along_rows, normalise, out))
-                name = ("rows" if along_rows else "columns") + ("/norm" if normalise else "")
-                rule = "direct" if aggregation.direct_is_faster(mean_arm, n_disp) else "running"
-                print(f"{scene.name:12s} {name:12s} {mean_arm:5.1f} {running:8.1f} "
-                      f"{direct:8.1f}  {rule}")
+        work, scratch = np.empty_like(volume), np.empty_like(volume)
+        row = []
+        for method in totals:
+            def once():
+                work[...] = volume
+                aggregation.aggregate_cross(work, arms_l, arms_r, scratch=scratch,
+                                            iterations=cfg.aggregation.iterations,
+                                            method=method)
+            ms = fastest_ms(once)
+            totals[method] += ms
+            row.append(f"{ms:9.1f}")
+        shape = "x".join(map(str, volume.shape))
+        print(f"{scene.name:12s} {shape:>16s} {arms_l.mean():5.1f}" + "".join(row))
+    print(f"{'total':12s} {'':>16s} {'':>5s}" + "".join(f"{v:9.1f}" for v in totals.values()))
 
 
 if __name__ == "__main__":

@@ -67,7 +67,8 @@ def test_aggregation_matches_explicit_region_average(rng, iterations, method, n)
 
 
 def test_aggregation_methods_agree_on_real_arms(rng):
-    """Long arms and a wide range: both methods, and the rule's choice, on one volume."""
+    """Long arms and a wide range: the running sums (integral images) are the direct sums
+    of the same regions."""
     image = np.zeros((30, 50, 3), np.uint8)
     image[:, 25:] = 200  # two flat halves: arms up to the step or the border
     theta = np.zeros((30, 50), np.float32)
@@ -87,11 +88,6 @@ def test_aggregation_method_is_checked():
                                     np.zeros((4, 2, 2), np.uint8),
                                     np.zeros((4, 2, 2), np.uint8), iterations=1,
                                     method="fast")
-
-
-def test_direct_sums_are_chosen_for_short_arms_and_wide_ranges():
-    assert aggregation.direct_is_faster(3.4, 60)
-    assert not aggregation.direct_is_faster(14.2, 16)
 
 
 def test_aggregation_keeps_a_constant_volume():

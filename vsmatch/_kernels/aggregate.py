@@ -60,6 +60,9 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
     for y in prange(height):
         total = np.zeros(max(depth, LANES), dtype=np.float32)
         size = np.ones(max(depth, LANES), dtype=np.float32)
+        # A neighbour's band, costs and region sizes, with LANES zeros either side.
+        window = np.zeros(3 * LANES, dtype=np.float32)
+        held = np.zeros(3 * LANES, dtype=np.float32)
         for x in range(width):
             base = np.int64(lo[y, x])
             n = np.int64(count[y, x])
@@ -94,20 +97,28 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
                     off = base - np.int64(lo[ny, nx])
                     first = max(np.int64(0), -off)
                     stop = min(n, np.int64(count[ny, nx]) - off)
-                    if lanes and off == 0 and count_here:  # the common case: one vector
+                    n_here = np.int64(count[ny, nx])
+                    if lanes and n_here <= LANES:
+                        # The neighbour's band laid into a zero-padded window, then read
+                        # shifted by ``off``: one vector whatever the two bands' offsets.
+                        if off <= -LANES or off >= LANES:
+                            continue  # the bands do not meet
                         row = src[ny, nx]
+                        for j in range(LANES):
+                            window[LANES + j] = row[j] if j < n_here else np.float32(0.0)
+                        if counted:
+                            sizes = counts_in[ny, nx]
+                            for j in range(LANES):
+                                held[LANES + j] = sizes[j] if j < n_here else np.float32(0.0)
+                        else:
+                            for j in range(LANES):
+                                held[LANES + j] = np.float32(1.0) if j < n_here else \
+                                    np.float32(0.0)
+                        at = LANES + off
                         for d in range(LANES):
-                            inside = (k32 <= np.int32(reach_r[d])) & (d < stop)
-                            total[d] += row[d] if inside else np.float32(0.0)
-                            size[d] += np.float32(1.0) if inside else np.float32(0.0)
-                        continue
-                    if lanes and off == 0:
-                        row = src[ny, nx]
-                        sizes = counts_in[ny, nx]
-                        for d in range(LANES):
-                            inside = (k32 <= np.int32(reach_r[d])) & (d < stop)
-                            total[d] += row[d] if inside else np.float32(0.0)
-                            size[d] += sizes[d] if inside else np.float32(0.0)
+                            inside = (k32 <= np.int32(reach_r[d])) & (d < n)
+                            total[d] += window[at + d] if inside else np.float32(0.0)
+                            size[d] += held[at + d] if inside else np.float32(0.0)
                         continue
                     if count_here:
                         for d in range(first, stop):
