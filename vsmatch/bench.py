@@ -17,6 +17,7 @@ it (twice as tall: does memory grow with the height?).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import resource
@@ -58,20 +59,52 @@ def standard_pairs(data_root=None) -> list[tuple[Any, evaluation.Scoring]]:
             for scene in datasets.load_dataset(name, data_root)]
 
 
+@contextlib.contextmanager
+def thread_count(count: int | None):
+    """Numba's and OpenCV's threads set to ``count`` inside the block (None: as they are),
+    and set back after it."""
+    import numba
+
+    if count is None:
+        yield
+        return
+    before = numba.get_num_threads(), cv2.getNumThreads()
+    numba.set_num_threads(count)
+    cv2.setNumThreads(count)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(before[0])
+        cv2.setNumThreads(before[1])
+
+
+def max_threads() -> int:
+    """The most threads Numba can be set to in this process (NUMBA_NUM_THREADS)."""
+    import numba
+
+    return int(numba.config.NUMBA_NUM_THREADS)
+
+
 def time_pairs(pairs, configs=BENCH_CONFIGS, rounds: int = 5,
-               peers=tuple(SGBM_MODES)) -> dict[str, Any]:
+               peers=tuple(SGBM_MODES), threads=None) -> dict[str, Any]:
     """Each config and SGBM mode on each ``(scene, scoring)`` pair, one after the other
     for ``rounds`` rounds; the fastest time of each, the stage times of that run, and its
     error (the scoring's headline on the non-occluded pixels: bad 1.0 on middlebury2,
-    bad 2.0 on Middlebury 2014). Ratios are against SGBM HH and 5-direction, over the
-    sums."""
+    bad 2.0 on Middlebury 2014). Ratios are against SGBM HH, 5-direction and 3-way, over
+    the sums.
+
+    ``threads``: thread counts (Numba's and OpenCV's both) to time each method at, taken
+    in turn within every round so that the machine's moods fall on all of them alike; the
+    result's ``by_threads`` holds each count's ``scenes`` and ``total``, and ``scenes``
+    and ``total`` are the last count's. Default: the threads as they are set."""
     scenes = [scene for scene, _ in pairs]
     cfgs = {name: load_config(name) for name in configs}
     warm = scenes[0]
     for cfg in cfgs.values():  # compile, or load the kernels
         pipeline.run(warm.left, warm.right, max_disp=warm.max_disp, config=cfg)
     methods = [*cfgs, *peers]
-    per_scene: dict[str, Any] = {}
+    counts = list(threads) if threads else [None]
+    by_threads: dict[Any, dict[str, Any]] = {n: {} for n in counts}
     # Each config keeps its volumes from round to round, as StereoMatcher does from frame
     # to frame and each SGBM matcher its buffer.
     pools = {name: volumes.VolumePool() for name in cfgs}
@@ -81,35 +114,52 @@ def time_pairs(pairs, configs=BENCH_CONFIGS, rounds: int = 5,
                                    mode=SGBM_MODES[peer]) for peer in peers}
         for matcher in sgbm.values():  # OpenCV's own first-call costs
             matcher.compute(scene.left, scene.right)
-        best = dict.fromkeys(methods, float("inf"))
-        stages: dict[str, dict[str, float]] = {}
+        runs = [(n, name) for n in counts for name in methods]
+        best = dict.fromkeys(runs, float("inf"))
+        stages: dict[Any, dict[str, float]] = {}
         disparities: dict[str, np.ndarray] = {}
         for _ in range(rounds):
-            for name in methods:
-                start = time.perf_counter()
-                if name in cfgs:
-                    with volumes.reused(pools[name]):
-                        result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp,
-                                              min_disp=scene.min_disp, config=cfgs[name])
-                else:
-                    raw = sgbm[name].compute(scene.left, scene.right)
-                seconds = time.perf_counter() - start
-                if seconds < best[name]:
-                    best[name] = seconds
+            for n, name in runs:
+                with thread_count(n):
+                    start = time.perf_counter()
                     if name in cfgs:
-                        stages[name] = result.seconds
-                # The same every round (deterministic). SGBM's holes are filled for the
-                # score only, outside its time: the filling is EVALUATION.md's, not SGBM's.
+                        with volumes.reused(pools[name]):
+                            result = pipeline.run(scene.left, scene.right,
+                                                  max_disp=scene.max_disp,
+                                                  min_disp=scene.min_disp, config=cfgs[name])
+                    else:
+                        raw = sgbm[name].compute(scene.left, scene.right)
+                    seconds = time.perf_counter() - start
+                if seconds < best[n, name]:
+                    best[n, name] = seconds
+                    if name in cfgs:
+                        stages[n, name] = result.seconds
+                # The same every round and thread count (deterministic). SGBM's holes are
+                # filled for the score only, outside its time: the filling is
+                # EVALUATION.md's, not SGBM's.
                 disparities[name] = result.disparity if name in cfgs else \
                     sgbm_fill_from_left(raw, scene.min_disp)
         mask = evaluation.headline_mask(scene)
-        per_scene[scene.name] = {}
+        scores = {}
         for name in methods:
             measures = scoring.measures(disparities[name], scene.ground_truth, mask)
-            per_scene[scene.name][name] = {
-                "seconds": best[name], "stages": stages.get(name, {}),
-                "error": measures[scoring.metric], "bad0.5": measures["bad0.5"],
-                "integer_share": measures["integer_share"]}
+            scores[name] = {"error": measures[scoring.metric], "bad0.5": measures["bad0.5"],
+                            "integer_share": measures["integer_share"]}
+        for n in counts:
+            by_threads[n][scene.name] = {
+                name: {"seconds": best[n, name], "stages": stages.get((n, name), {}),
+                       **scores[name]} for name in methods}
+    series = {("as set" if n is None else n): {"scenes": per_scene,
+                                               "total": _totals(per_scene, methods)}
+              for n, per_scene in by_threads.items()}
+    last = series[list(series)[-1]]
+    return {"rounds": rounds, "methods": methods, "configs": list(cfgs),
+            "threads": list(series), "by_threads": series, **last}
+
+
+def _totals(per_scene: dict[str, Any], methods: list[str]) -> dict[str, Any]:
+    """Each method's seconds and stage seconds summed over the pairs, its mean error, and
+    its time over each SGBM mode's."""
     totals = {}
     for name in methods:
         seconds = sum(s[name]["seconds"] for s in per_scene.values())
@@ -121,11 +171,10 @@ def time_pairs(pairs, configs=BENCH_CONFIGS, rounds: int = 5,
                         **{key: float(np.mean([s[name][key] for s in per_scene.values()]))
                            for key in ("error", "bad0.5", "integer_share")}}
     for name in methods:
-        for peer in ("sgbm-hh", "sgbm-5"):
+        for peer in SGBM_MODES:
             if peer in totals:
                 totals[name][f"x_{peer}"] = totals[name]["seconds"] / totals[peer]["seconds"]
-    return {"rounds": rounds, "methods": methods, "configs": list(cfgs),
-            "scenes": per_scene, "total": totals}
+    return totals
 
 
 def _run_child(args: list[str], env: dict[str, str] | None = None) -> dict[str, Any]:
@@ -314,9 +363,10 @@ def _child_size(argv: list[str]) -> None:
 
 
 def run_benchmark(data_root=None, configs=BENCH_CONFIGS, rounds: int = 5,
-                  cold: bool = True, size: bool = True) -> dict[str, Any]:
+                  cold: bool = True, size: bool = True, threads=None) -> dict[str, Any]:
     """Everything :mod:`vsmatch.bench` measures, as one JSON-ready dict. Start-up,
-    the whole command and memory are measured for the first config."""
+    the whole command and memory are measured for the first config; ``threads``: the
+    thread counts the standard pairs are timed at (:func:`time_pairs`)."""
     import numba
 
     configs = list(configs)
@@ -327,7 +377,7 @@ def run_benchmark(data_root=None, configs=BENCH_CONFIGS, rounds: int = 5,
     report: dict[str, Any] = {
         "configs": configs,
         "threads": {"numba": numba.get_num_threads(), "opencv": cv2.getNumThreads()},
-        "pairs": time_pairs(standard_pairs(data_root), configs, rounds),
+        "pairs": time_pairs(standard_pairs(data_root), configs, rounds, threads=threads),
         "run_command_cones": run_command(left, right, cones_disp, first, 3),
         "memory_cones": memory(left, right, cones_disp, first)}
     if cold:
@@ -359,6 +409,43 @@ def tradeoff_figure(report: dict[str, Any]) -> np.ndarray:
                          title="time against error: lower left is better")
 
 
+def format_threads(pairs: dict[str, Any]) -> list[str]:
+    """The thread series: each method's seconds at each count, each config's ratios to
+    SGBM's modes and speed-up over the first count, and its stages' shares and speed-ups."""
+    counts = pairs["threads"]
+    series = pairs["by_threads"]
+    first = counts[0]
+    head = "".join(f"{f'{n} threads':>12}" for n in counts)
+    lines = ["", f"by thread count (Numba's and OpenCV's both), seconds over the "
+                 f"{len(pairs['scenes'])} pairs:", f"{'':<22}{head}"]
+    for name in pairs["methods"]:
+        lines.append(f"{name:<22}" + "".join(f"{series[n]['total'][name]['seconds']:12.3f}"
+                                             for n in counts))
+    for name in pairs["configs"]:
+        for peer in SGBM_MODES:
+            if peer in pairs["methods"]:
+                lines.append(f"{name + ' x ' + peer:<22}" + "".join(
+                    f"{series[n]['total'][name][f'x_{peer}']:12.2f}" for n in counts))
+        base = series[first]["total"][name]["seconds"]
+        lines.append(f"{name + ' speed-up':<22}" + "".join(
+            f"{base / series[n]['total'][name]['seconds']:12.2f}" for n in counts))
+    for name in pairs["configs"]:
+        lines += ["", f"{name}: stage seconds (share of the time) and speed-up over "
+                      f"{first} thread{'s' if first != 1 else ''}:",
+                  f"  {'stage':<14}" + "".join(f"{f'{n} threads':>16}" for n in counts)
+                  + "".join(f"{f'x at {n}':>9}" for n in counts[1:])]
+        stages = {n: series[n]["total"][name]["stages"] for n in counts}
+        sums = {n: sum(stages[n].values()) or 1.0 for n in counts}
+        for stage in sorted(stages[counts[-1]], key=lambda k: -stages[counts[-1]][k]):
+            cells = "".join(f"{stages[n].get(stage, 0):9.3f}"
+                            f"{f'({100 * stages[n].get(stage, 0) / sums[n]:.0f}%)':>7}"
+                            for n in counts)
+            ups = "".join(f"{stages[first].get(stage, 0) / max(stages[n].get(stage, 0), 1e-9):9.2f}"
+                          for n in counts[1:])
+            lines.append(f"  {stage:<14}{cells}{ups}")
+    return lines
+
+
 def _memory_line(name: str, mem: dict[str, Any]) -> str:
     extra = mem["peak_mb"] - mem["before_match_mb"]
     return (f"{name} peak memory: {mem['peak_mb']:.0f} MB; matching adds {extra:.0f} MB "
@@ -374,8 +461,11 @@ def format_report(report: dict[str, Any]) -> str:
     """The printed tables."""
     pairs = report["pairs"]
     methods = pairs["methods"]
+    series = "" if len(pairs["threads"]) < 2 else \
+        f"; the pairs at {', '.join(map(str, pairs['threads']))} threads, the table below at " \
+        f"{pairs['threads'][-1]}"
     lines = [f"configs {', '.join(report['configs'])}; threads: numba "
-             f"{report['threads']['numba']}, opencv {report['threads']['opencv']}; "
+             f"{report['threads']['numba']}, opencv {report['threads']['opencv']}{series}; "
              f"fastest of {pairs['rounds']} alternating rounds", "",
              "seconds per pair:", f"{'pair':<12}" + "".join(f"{m:>11}" for m in methods)]
     for name, s in pairs["scenes"].items():
@@ -386,6 +476,9 @@ def format_report(report: dict[str, Any]) -> str:
                                               for m in methods))
     lines.append(f"{'x SGBM 5-dir':<12}" + "".join(f"{total[m].get('x_sgbm-5', 0):11.2f}"
                                                  for m in methods))
+    if "sgbm-3way" in methods:
+        lines.append(f"{'x SGBM 3-way':<12}" + "".join(
+            f"{total[m].get('x_sgbm-3way', 0):11.2f}" for m in methods))
     lines.append(f"{'error':<12}" + "".join(f"{total[m]['error']:11.2f}" for m in methods))
     if all("bad0.5" in total[m] for m in methods):
         lines.append(f"{'bad 0.5':<12}" + "".join(f"{total[m]['bad0.5']:11.2f}"
@@ -395,10 +488,13 @@ def format_report(report: dict[str, Any]) -> str:
     lines.append("error: mean over the pairs of nonocc bad 1.0 (middlebury2) and bad 2.0 "
                  "(Middlebury 2014); bad 0.5 and integer (the share of estimates within 0.1 "
                  "px of a whole number: 0.2 for an even spread) on the same pixels")
-    for name in pairs["configs"]:
-        lines += ["", f"{name}: stage seconds, sum over the pairs:"]
-        for stage, sec in sorted(total[name]["stages"].items(), key=lambda kv: -kv[1]):
-            lines.append(f"  {stage:<14}{sec:8.3f}")
+    if len(pairs["threads"]) > 1:
+        lines += format_threads(pairs)
+    else:
+        for name in pairs["configs"]:
+            lines += ["", f"{name}: stage seconds, sum over the pairs:"]
+            for stage, sec in sorted(total[name]["stages"].items(), key=lambda kv: -kv[1]):
+                lines.append(f"  {stage:<14}{sec:8.3f}")
     run = report["run_command_cones"]
     mem = report["memory_cones"]
     first = report["configs"][0]

@@ -38,8 +38,7 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
         # LANES more: a narrow band's step reads that far.
         change_l, change_r_rev = change_maps(left, right, cfg.tau, along_rows, n_disp + LANES)
         if along_rows:  # first: writes every cell of ``out``
-            scanline_rows(volume, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight, True,
-                          out)
+            scanline_rows(volume, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight, out)
         else:
             scanline_columns(volume, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight,
                              COLUMN_CHUNK, out)

@@ -129,25 +129,27 @@ def cross_arms(planes, theta, strength, breaks_h, breaks_v, tau1, tau3, l1, l2, 
                             faded[x] = min(th1[x], math.ceil(th1[x] * fade))
                         lim1 = faded
                     lim3 = th3 if k > l1 else lim1
+                    # One call site of the inlined step: four would compile four copies.
                     if axis == 0:
                         # Pixels within k of the border have no k-th neighbour.
+                        y_n = np.int64(y)  # prange's index may be unsigned: keep it signed
+                        brk = breaks_h[y]
                         if side == 0:  # left: x - k; the break between x-k and x-k+1
                             first = max(first, k)
-                            first, stop = _grow_row(planes, y, y, -k, first, stop, breaks_h[y],
-                                                    1 - k, lim1, lim3, dist, alive, arm)
+                            shift, brk_shift = np.int64(-k), np.int64(1 - k)
                         else:  # right: x + k; the break at x + k
                             stop = min(stop, width - k)
-                            first, stop = _grow_row(planes, y, y, k, first, stop, breaks_h[y],
-                                                    k, lim1, lim3, dist, alive, arm)
+                            shift, brk_shift = np.int64(k), np.int64(k)
                     else:
-                        y_n = y - k if side == 0 else y + k
+                        y_n = np.int64(y) - k if side == 0 else np.int64(y) + k
                         if y_n < 0 or y_n >= height:
                             break
                         # The break between rows y_n and y_n + 1 (up) or y_n - 1 (down) is
                         # stored at the later row.
                         brk = breaks_v[y_n + 1] if side == 0 else breaks_v[y_n]
-                        first, stop = _grow_row(planes, y_n, y, 0, first, stop, brk, 0, lim1,
-                                                lim3, dist, alive, arm)
+                        shift, brk_shift = np.int64(0), np.int64(0)
+                    first, stop = _grow_row(planes, y_n, y, shift, first, stop, brk, brk_shift,
+                                            lim1, lim3, dist, alive, arm)
                     if first >= stop:
                         break
                 for x in range(width):

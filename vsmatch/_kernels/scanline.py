@@ -80,41 +80,6 @@ def _path_steps(write, lanes):
 #: Candidates a narrow band's path step takes at once: one vector of float32.
 LANES = 8
 
-_first_step, _next_step = _path_steps(False, False)
-_first_step_write, _next_step_write = _path_steps(True, False)
-_first_lanes, _next_lanes = _path_steps(False, True)
-_first_lanes_write, _next_lanes_write = _path_steps(True, True)
-
-
-@njit(inline="always")
-def _first(src, dst, cur, weight, n, write, lanes):
-    """The step that starts a path, of the kind ``write`` and ``lanes`` ask for."""
-    if lanes:
-        if write:
-            return _first_lanes_write(src, dst, cur, weight, n)
-        return _first_lanes(src, dst, cur, weight, n)
-    if write:
-        return _first_step_write(src, dst, cur, weight, n)
-    return _first_step(src, dst, cur, weight, n)
-
-
-@njit(inline="always")
-def _next(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, m, weight, n, bits,
-          write, lanes):
-    """The next step of a path, of the kind ``write`` and ``lanes`` ask for."""
-    if lanes:
-        if write:
-            return _next_lanes_write(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
-                                     p2b, m, weight, n, bits)
-        return _next_lanes(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, m,
-                           weight, n, bits)
-    if write:
-        return _next_step_write(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b,
-                                m, weight, n, bits)
-    return _next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, m, weight,
-                      n, bits)
-
-
 @njit(inline="always")
 def _rebase(prev, tmp, off, n_prev, n):
     """``prev``, the previous pixel's path costs at 1 + k over its band of ``n_prev``
@@ -128,12 +93,17 @@ def _rebase(prev, tmp, off, n_prev, n):
         prev[j] = tmp[j]
 
 
-def _walk_steps(banded):
+def _walk_steps(banded, write):
     """One pixel's step of a path, compiled for bands (``banded``) or for the whole range
-    at every pixel, where the band bookkeeping is left out of the loops' way."""
+    at every pixel, where the band bookkeeping is left out of the loops' way; ``write``:
+    the step writes its share of ``out`` rather than adds it. Both are constants to the
+    compiler: each kernel holds the steps it takes and no more, which keeps compilation
+    short."""
+    first_whole, next_whole = _path_steps(write, False)
+    first_lanes, next_lanes = _path_steps(write, True)
 
     @njit(inline="always")
-    def walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, write, y, x,
+    def walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y, x,
                   ey, ex, prev_lo, prev_n, m, prev, cur, cur_bits, tmp, bits):
         """Pixel (y, x) of a path; the edge crossed from the previous pixel is stored at
         (ey, ex); the previous pixel's band was ``prev_lo``, ``prev_n`` (-1 before the
@@ -149,7 +119,12 @@ def _walk_steps(banded):
         # A narrow band in a volume deep enough takes one vector a step.
         lanes = banded and n <= LANES and cost.shape[2] >= LANES
         if prev_n < 0:  # the path starts: its cost is the matching cost
-            new_min = _first(src, dst, cur, weight, n, write, lanes)
+            if not banded:
+                new_min = first_whole(src, dst, cur, weight, n)
+            elif lanes:
+                new_min = first_lanes(src, dst, cur, weight, n)
+            else:
+                new_min = first_whole(src, dst, cur, weight, n)
         else:
             if banded and (base != prev_lo or n != prev_n):
                 # A vector's step reads the path costs of all its lanes.
@@ -158,8 +133,15 @@ def _walk_steps(banded):
             cl = change_l[ey, ex]
             change_r = change_r_rev[ey, width - 1 - ex + base:]
             p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
-            new_min = _next(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, m,
-                            weight, n, bits, write, lanes)
+            if not banded:
+                new_min = next_whole(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
+                                     p2b, m, weight, n, bits)
+            elif lanes:
+                new_min = next_lanes(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
+                                     p2b, m, weight, n, bits)
+            else:
+                new_min = next_whole(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
+                                     p2b, m, weight, n, bits)
         if banded:
             # Past the band's ends the path is infinite (an earlier, wider band may have
             # left values there).
@@ -172,69 +154,184 @@ def _walk_steps(banded):
     return walk_step
 
 
-_walk_step_banded = _walk_steps(True)
-_walk_step_whole = _walk_steps(False)
+# The steps each kernel may take. Module globals, not closure cells: a kernel's closure
+# holds only its ``banded`` flag, which Numba folds before inlining (the branch not taken
+# is never compiled) and which keys its on-disk cache the same way in every process.
+_walk_whole_write = _walk_steps(False, True)
+_walk_whole_add = _walk_steps(False, False)
+_walk_band_write = _walk_steps(True, True)
+_walk_band_add = _walk_steps(True, False)
 
 
-@njit(inline="always")
-def _walk_step(banded, cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, write, y,
-               x, ey, ex, prev_lo, prev_n, m, prev, cur, cur_bits, tmp, bits):
-    """:func:`_walk_steps`' step for bands (``banded``) or for the whole range."""
-    if banded:
-        return _walk_step_banded(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                                 write, y, x, ey, ex, prev_lo, prev_n, m, prev, cur, cur_bits,
-                                 tmp, bits)
-    return _walk_step_whole(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                            write, y, x, ey, ex, prev_lo, prev_n, m, prev, cur, cur_bits, tmp,
-                            bits)
+def _row_kernel(banded):
+    """:func:`scanline_rows`' kernel for bands or for the whole range."""
+
+    @njit(**KERNEL_OPTIONS)
+    def rows(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, out):
+        height, width, depth = cost.shape
+        for y in prange(height):
+            # Two path-cost rows, used in turn as previous and current.
+            paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
+            path_bits = paths.view(np.int32)
+            tmp = np.empty(depth + 2, dtype=np.float32)
+            bits = np.empty(1, dtype=np.int32)
+            prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
+            for direction in (1, -1):
+                start = 0 if direction == 1 else width - 1
+                prev_n = np.int64(-1)
+                for step in range(width):
+                    x = start + direction * step
+                    if banded and count[y, x] <= 0:  # no band: the path restarts after it
+                        prev_n = np.int64(-1)
+                        continue
+                    now = step % 2
+                    # The edge crossed from the previous pixel: stored at the later of the two.
+                    ex = x if direction == 1 else x + 1
+                    # The first walk writes every cell (no zeroing beforehand), the second adds.
+                    if direction == 1:
+                        if banded:
+                            prev_lo, prev_n, m = _walk_band_write(
+                                cost, out, lo, count, change_l, change_r_rev, p1s, p2s,
+                                weight, y, x, y, ex, prev_lo, prev_n, m, paths[1 - now],
+                                paths[now], path_bits[now], tmp, bits)
+                        else:
+                            prev_lo, prev_n, m = _walk_whole_write(
+                                cost, out, lo, count, change_l, change_r_rev, p1s, p2s,
+                                weight, y, x, y, ex, prev_lo, prev_n, m, paths[1 - now],
+                                paths[now], path_bits[now], tmp, bits)
+                    elif banded:
+                        prev_lo, prev_n, m = _walk_band_add(
+                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                            y, x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
+                            path_bits[now], tmp, bits)
+                    else:
+                        prev_lo, prev_n, m = _walk_whole_add(
+                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                            y, x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
+                            path_bits[now], tmp, bits)
+
+    return rows
 
 
-@njit(**KERNEL_OPTIONS)
-def scanline_rows(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight, fresh,
-                  out):
-    """Add ``weight`` x the path costs of both directions along every row.
+def _column_kernel(banded):
+    """:func:`scanline_columns`' kernel for bands or for the whole range."""
+
+    @njit(**KERNEL_OPTIONS)
+    def columns(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, chunk, out):
+        height, width, depth = cost.shape
+        n_chunks = (width + chunk - 1) // chunk
+        for c in prange(n_chunks):
+            x0 = c * chunk
+            n = min(width, x0 + chunk) - x0
+            prev = np.full((n, depth + 2), np.inf, dtype=np.float32)
+            cur = np.full((n, depth + 2), np.inf, dtype=np.float32)
+            tmp = np.empty(depth + 2, dtype=np.float32)
+            bits = np.empty(1, dtype=np.int32)
+            prev_lo = np.zeros(n, dtype=np.int64)
+            prev_n = np.empty(n, dtype=np.int64)
+            mins = np.zeros(n, dtype=np.float32)
+            for direction in (1, -1):
+                prev_n[:] = -1
+                for step in range(height):
+                    y = step if direction == 1 else height - 1 - step
+                    ey = y if direction == 1 else y + 1  # the edge crossed, at the later row
+                    cur_bits = cur.view(np.int32)
+                    for k in range(n):
+                        x = x0 + k
+                        if banded and count[y, x] <= 0:  # no band: the path restarts
+                            prev_n[k] = -1
+                            continue
+                        if banded:
+                            prev_lo[k], prev_n[k], mins[k] = _walk_band_add(
+                                cost, out, lo, count, change_l, change_r_rev, p1s, p2s,
+                                weight, y, x, ey, x, prev_lo[k], prev_n[k], mins[k],
+                                prev[k], cur[k], cur_bits[k], tmp, bits)
+                        else:
+                            prev_lo[k], prev_n[k], mins[k] = _walk_whole_add(
+                                cost, out, lo, count, change_l, change_r_rev, p1s, p2s,
+                                weight, y, x, ey, x, prev_lo[k], prev_n[k], mins[k],
+                                prev[k], cur[k], cur_bits[k], tmp, bits)
+                    prev, cur = cur, prev
+
+    return columns
+
+
+def _diagonal_kernel(banded):
+    """:func:`scanline_diagonal_pass`' kernel for bands or for the whole range."""
+
+    @njit(**KERNEL_OPTIONS)
+    def diagonal(cost, lo, count, change_l, change_r_rev, p1s, p2s, step_x, weight, out):
+        height, width, depth = cost.shape
+        n_lines = height + width - 1
+        for index in prange(n_lines):
+            line = np.int64(index)  # prange's index may be unsigned: keep the sums signed
+            # Line starts on the top row, then down the first column (last for step_x = -1).
+            if line < width:
+                y0, x0 = 0, line if step_x == 1 else width - 1 - line
+            else:
+                y0, x0 = line - width + 1, 0 if step_x == 1 else width - 1
+            room_x = width - 1 - x0 if step_x == 1 else x0
+            length = min(height - y0, room_x + 1)
+            paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
+            path_bits = paths.view(np.int32)
+            tmp = np.empty(depth + 2, dtype=np.float32)
+            bits = np.empty(1, dtype=np.int32)
+            prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
+            for direction in (1, -1):
+                start = 0 if direction == 1 else length - 1
+                prev_n = np.int64(-1)
+                for step in range(length):
+                    i = start + direction * step
+                    y = y0 + i
+                    x = x0 + i * step_x
+                    if banded and count[y, x] <= 0:  # no band: the path restarts after it
+                        prev_n = np.int64(-1)
+                        continue
+                    now = step % 2
+                    # The edge crossed is stored at the later pixel of the two, top to bottom.
+                    ey = y if direction == 1 else y + 1
+                    ex = x if direction == 1 else x + step_x
+                    if banded:
+                        prev_lo, prev_n, m = _walk_band_add(
+                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                            y, x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
+                            path_bits[now], tmp, bits)
+                    else:
+                        prev_lo, prev_n, m = _walk_whole_add(
+                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                            y, x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
+                            path_bits[now], tmp, bits)
+
+    return diagonal
+
+
+#: The kernels for the whole range and for bands, each compiled on its first call.
+_ROWS = {False: _row_kernel(False), True: _row_kernel(True)}
+_COLUMNS = {False: _column_kernel(False), True: _column_kernel(True)}
+_DIAGONALS = {False: _diagonal_kernel(False), True: _diagonal_kernel(True)}
+
+
+def scanline_rows(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight, out):
+    """Write ``weight`` x the path costs of both directions along every row to ``out``
+    (every cell of the bands).
 
     C_r(p, d) = C(p, d) + min(C_r(p-r, d), C_r(p-r, d+-1) + P1,
                               min_k C_r(p-r, k) + P2) - min_k C_r(p-r, k).
 
     ``cost[y, x, k]`` is the cost of disparity ``lo[y, x] + k`` for ``k < count[y, x]``
-    (the pixel's band; the whole range: ``lo`` 0, ``count`` D); a disparity outside the
-    previous pixel's band has an infinite path cost there. ``change_l[y, x]`` is 1 where
-    the left image's colour changes by ``tau`` or more between (y, x) and its predecessor
-    along the pass ((y, x - 1) here, (y - 1, x) in :func:`scanline_columns`; 1 where there
-    is none). ``change_r_rev`` is the same map of the right image, reversed along x and
-    padded with ones: ``change_r_rev[y, W - 1 - x + d]`` is the change at the right pixel
-    (y, x - d) of (y, x), 1 where x - d < 0. ``p1s[k]``, ``p2s[k]`` are the penalties where
-    ``k`` (0, 1 or 2) of the two images change. ``fresh``: ``out`` holds nothing yet; the
-    first direction writes it rather than adds.
+    (the pixel's band; the whole range: ``lo`` 0, ``count`` D, ``banded`` False); a
+    disparity outside the previous pixel's band has an infinite path cost there.
+    ``change_l[y, x]`` is 1 where the left image's colour changes by ``tau`` or more
+    between (y, x) and its predecessor along the pass ((y, x - 1) here, (y - 1, x) in
+    :func:`scanline_columns`; 1 where there is none). ``change_r_rev`` is the same map of
+    the right image, reversed along x and padded with ones: ``change_r_rev[y, W - 1 - x +
+    d]`` is the change at the right pixel (y, x - d) of (y, x), 1 where x - d < 0.
+    ``p1s[k]``, ``p2s[k]`` are the penalties where ``k`` (0, 1 or 2) of the two images
+    change.
     """
-    height, width, depth = cost.shape
-    for y in prange(height):
-        # Two path-cost rows, used in turn as previous and current.
-        paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
-        path_bits = paths.view(np.int32)
-        tmp = np.empty(depth + 2, dtype=np.float32)
-        bits = np.empty(1, dtype=np.int32)
-        prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
-        for direction in (1, -1):
-            write = fresh and direction == 1
-            start = 0 if direction == 1 else width - 1
-            prev_n = np.int64(-1)
-            for step in range(width):
-                x = start + direction * step
-                if banded and count[y, x] <= 0:  # no band: the path restarts after it
-                    prev_n = np.int64(-1)
-                    continue
-                now = step % 2
-                # The edge crossed from the previous pixel: stored at the later of the two.
-                ex = x if direction == 1 else x + 1
-                prev_lo, prev_n, m = _walk_step(
-                    banded, cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, write,
-                    y, x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], path_bits[now],
-                    tmp, bits)
+    _ROWS[bool(banded)](cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, out)
 
 
-@njit(**KERNEL_OPTIONS)
 def scanline_columns(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight, chunk,
                      out):
     """:func:`scanline_rows` down and up every column, adding to ``out``.
@@ -244,37 +341,10 @@ def scanline_columns(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, 
     read one pixel a row (measured on the twelve standard pairs: 0.6-0.7x the time). Each
     column's sums are its own, so the chunk size does not change the result.
     """
-    height, width, depth = cost.shape
-    n_chunks = (width + chunk - 1) // chunk
-    for c in prange(n_chunks):
-        x0 = c * chunk
-        n = min(width, x0 + chunk) - x0
-        prev = np.full((n, depth + 2), np.inf, dtype=np.float32)
-        cur = np.full((n, depth + 2), np.inf, dtype=np.float32)
-        tmp = np.empty(depth + 2, dtype=np.float32)
-        bits = np.empty(1, dtype=np.int32)
-        prev_lo = np.zeros(n, dtype=np.int64)
-        prev_n = np.empty(n, dtype=np.int64)
-        mins = np.zeros(n, dtype=np.float32)
-        for direction in (1, -1):
-            prev_n[:] = -1
-            for step in range(height):
-                y = step if direction == 1 else height - 1 - step
-                ey = y if direction == 1 else y + 1  # the edge crossed, at the later row
-                cur_bits = cur.view(np.int32)
-                for k in range(n):
-                    x = x0 + k
-                    if banded and count[y, x] <= 0:  # no band: the path restarts after it
-                        prev_n[k] = -1
-                        continue
-                    prev_lo[k], prev_n[k], mins[k] = _walk_step(
-                        banded, cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                        False, y, x, ey, x, prev_lo[k], prev_n[k], mins[k], prev[k], cur[k],
-                        cur_bits[k], tmp, bits)
-                prev, cur = cur, prev
+    _COLUMNS[bool(banded)](cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, chunk,
+                           out)
 
 
-@njit(**KERNEL_OPTIONS)
 def scanline_diagonal_pass(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, step_x,
                            weight, out):
     """:func:`scanline_rows` along the diagonals that step (1, ``step_x``), both ways, adding.
@@ -283,37 +353,5 @@ def scanline_diagonal_pass(cost, lo, count, banded, change_l, change_r_rev, p1s,
     (y - 1, x - step_x), and where there is no such pixel; ``change_r_rev`` the same of the
     right image, reversed along x and padded with ones.
     """
-    height, width, depth = cost.shape
-    n_lines = height + width - 1
-    for index in prange(n_lines):
-        line = np.int64(index)  # prange's index may be unsigned: keep the sums signed
-        # Line starts on the top row, then down the first column (last for step_x = -1).
-        if line < width:
-            y0, x0 = 0, line if step_x == 1 else width - 1 - line
-        else:
-            y0, x0 = line - width + 1, 0 if step_x == 1 else width - 1
-        room_x = width - 1 - x0 if step_x == 1 else x0
-        length = min(height - y0, room_x + 1)
-        paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
-        path_bits = paths.view(np.int32)
-        tmp = np.empty(depth + 2, dtype=np.float32)
-        bits = np.empty(1, dtype=np.int32)
-        prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
-        for direction in (1, -1):
-            start = 0 if direction == 1 else length - 1
-            prev_n = np.int64(-1)
-            for step in range(length):
-                i = start + direction * step
-                y = y0 + i
-                x = x0 + i * step_x
-                if banded and count[y, x] <= 0:  # no band: the path restarts after it
-                    prev_n = np.int64(-1)
-                    continue
-                now = step % 2
-                # The edge crossed is stored at the later pixel of the two, top to bottom.
-                ey = y if direction == 1 else y + 1
-                ex = x if direction == 1 else x + step_x
-                prev_lo, prev_n, m = _walk_step(
-                    banded, cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, False,
-                    y, x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], path_bits[now],
-                    tmp, bits)
+    _DIAGONALS[bool(banded)](cost, lo, count, change_l, change_r_rev, p1s, p2s, step_x, weight,
+                             out)

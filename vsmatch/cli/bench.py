@@ -16,7 +16,8 @@ from .main import main
 
 @main.command("bench", epilog=examples(
     "vsmatch bench",
-    "vsmatch bench --config default --config fast --json bench.json --plot pareto.png"))
+    "vsmatch bench --config default --config fast --json bench.json --plot pareto.png",
+    "vsmatch bench --threads 1,2 --no-cold --no-size"))
 @data_root_option
 @click.option("--config", "configs", multiple=True, metavar="NAME|PATH",
               help="A config to time (repeatable): a bundled one "
@@ -29,6 +30,11 @@ from .main import main
               "(it compiles every kernel, about 45 s).")
 @click.option("--no-size", is_flag=True, help="Skip the size series (Adirondack, a KITTI "
               "frame, 1.5 megapixels, 4x and 4x twice as tall; several minutes).")
+@click.option("--threads", "threads", default=None, metavar="N[,N...]",
+              help="Time the standard pairs at each of these thread counts (Numba's and "
+                   "OpenCV's both, taken in turn within every round), with each config's "
+                   "speed-up and each stage's: e.g. 1,2 or 1,2,16. Default: the threads as "
+                   "set (NUMBA_NUM_THREADS, all cores).")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help="Write the measurements as JSON here.")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
@@ -37,7 +43,8 @@ from .main import main
 @verbosity_options
 @click.pass_context
 @friendly_errors
-def bench_command(ctx, data_root, configs, rounds, no_cold, no_size, json_path, plot_path):
+def bench_command(ctx, data_root, configs, rounds, no_cold, no_size, threads, json_path,
+                  plot_path):
     """Time vsmatch's configs against OpenCV StereoSGBM (block size 3) on the standard
     pairs and at size.
 
@@ -54,6 +61,7 @@ def bench_command(ctx, data_root, configs, rounds, no_cold, no_size, json_path, 
     from .. import bench
 
     check_outputs([], [json_path, plot_path])
+    counts = None if threads is None else thread_counts(threads, bench.max_threads())
     for name in {*bench.STANDARD_DATASETS, *(entry[1] for entry in bench.SIZE_SERIES)}:
         try:
             folder = datasets.dataset_folder(name, data_root)
@@ -67,7 +75,7 @@ def bench_command(ctx, data_root, configs, rounds, no_cold, no_size, json_path, 
     for config in configs:
         load_config(config)
     report = bench.run_benchmark(data_root, configs, rounds, cold=not no_cold,
-                                 size=not no_size)
+                                 size=not no_size, threads=counts)
     echo(ctx, bench.format_report(report))
     if json_path is not None:
         io.write_text_atomic(json_path, json.dumps(report, indent=2) + "\n")
@@ -75,3 +83,22 @@ def bench_command(ctx, data_root, configs, rounds, no_cold, no_size, json_path, 
     if plot_path is not None:
         io.imwrite_atomic(plot_path, bench.tradeoff_figure(report))
         echo(ctx, f"wrote {plot_path}")
+
+
+def thread_counts(text: str, most: int) -> list[int]:
+    """``--threads``' comma-separated counts, each between 1 and ``most``, in order, once."""
+    counts = []
+    for part in text.split(","):
+        try:
+            count = int(part)
+        except ValueError:
+            raise click.BadParameter(f"{part.strip()!r} is not a thread count: give whole "
+                                     f"numbers separated by commas, e.g. 1,2",
+                                     param_hint="--threads") from None
+        if not 1 <= count <= most:
+            raise click.BadParameter(
+                f"{count} threads: this process can use 1 to {most} (NUMBA_NUM_THREADS; "
+                f"the machine's cores unless set)", param_hint="--threads")
+        if count not in counts:
+            counts.append(count)
+    return counts
