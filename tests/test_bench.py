@@ -132,3 +132,44 @@ def test_bench_refuses_a_plot_that_is_not_png_before_any_work(tmp_path):
     result = CliRunner().invoke(main, ["bench", "--config", "nonesuch", "--no-size"])
     assert result.exit_code == 1 and "nonesuch" in result.output
     assert not list(tmp_path.iterdir())
+
+
+def test_thread_series_times_each_count_and_sets_the_threads_back():
+    """--threads: every method at every count, the counts taken in turn within a round;
+    each count's totals, the speed-ups and each stage's in the printed table; and the
+    threads as they were afterwards."""
+    import numba
+
+    before = numba.get_num_threads(), cv2.getNumThreads()
+    pair = synthetic.make_pair(width=96, height=64)
+    scene = Scene("synthetic", pair.left, pair.right, pair.disparity,
+                  {"nonocc": pair.nonocc, "all": pair.nonocc}, 40)
+    counts = sorted({1, bench.max_threads()})
+    result = bench.time_pairs([(scene, Scoring.bad(1.0))], ["fast"], rounds=1,
+                              threads=counts)
+    assert (numba.get_num_threads(), cv2.getNumThreads()) == before
+    assert result["threads"] == counts
+    series = result["by_threads"]
+    for n in counts:
+        assert series[n]["total"]["fast"]["seconds"] > 0
+        assert "x_sgbm-3way" in series[n]["total"]["fast"]
+        assert "aggregation" in series[n]["total"]["fast"]["stages"]
+    assert result["total"] is series[counts[-1]]["total"]
+    lines = bench.format_threads(result)
+    assert any(line.startswith("fast speed-up") for line in lines)
+    stage_rows = [line for line in lines if line.strip().startswith("aggregation")]
+    assert len(stage_rows) == 1 and stage_rows[0].count("%") == len(counts)
+
+
+def test_bench_refuses_thread_counts_it_cannot_set_before_any_work(tmp_path):
+    from click.testing import CliRunner
+
+    from vsmatch.cli import main
+
+    runner = CliRunner()
+    for value, message in (("1,x", "'x' is not a thread count"),
+                           (f"1,{bench.max_threads() + 1}", "this process can use 1 to")):
+        result = runner.invoke(main, ["bench", "--threads", value, "--json",
+                                      str(tmp_path / "b.json")])
+        assert result.exit_code == 2 and message in result.output
+        assert not (tmp_path / "b.json").exists()
