@@ -397,5 +397,5 @@ def announce_compilation(ctx: click.Context) -> None:
     from .._kernels import cache_is_cold
 
     if cache_is_cold():
-        echo(ctx, "compiling the kernels once (about 45 s; later runs start at once)",
+        echo(ctx, "compiling the kernels once (about 35 s; later runs start at once)",
               err=True)
