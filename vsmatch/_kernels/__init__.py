@@ -11,8 +11,9 @@ KERNEL_OPTIONS = dict(parallel=True, cache=True, nogil=True, error_model="numpy"
 
 def cache_is_cold() -> bool:
     """True when no compiled kernel is cached yet for this Python, so the first run
-    compiles them all (about 35 s on 2 cores). Numba itself says where it caches: beside the sources,
-    or under ~/.cache/numba when the package is installed read-only, or NUMBA_CACHE_DIR."""
+    compiles them all (about 35 s on 2 cores). Numba itself says where it caches: beside the
+    sources, or under ~/.cache/numba when the package is installed read-only, or
+    NUMBA_CACHE_DIR."""
     import sys
     from pathlib import Path
 
