@@ -156,7 +156,9 @@ def _walk_steps(banded, write):
 
 # The steps each kernel may take. Module globals, not closure cells: a kernel's closure
 # holds only its ``banded`` flag, which Numba folds before inlining (the branch not taken
-# is never compiled) and which keys its on-disk cache the same way in every process.
+# is never compiled) and which keys its on-disk cache the same way in every process. The
+# kernels spell each call out: Numba does not inline a call with *args, and packing the
+# arguments into tuples changed `fast`'s output (not found why; left as it is).
 _walk_whole_write = _walk_steps(False, True)
 _walk_whole_add = _walk_steps(False, False)
 _walk_band_write = _walk_steps(True, True)
