@@ -1,5 +1,7 @@
 """Coarse-to-fine search and stripes: the parts that keep large images in bounds."""
 
+import os
+
 import numba
 import numpy as np
 import pytest
@@ -323,3 +325,37 @@ def test_confidence_in_row_blocks_is_the_same_bytes(teddy, monkeypatch):
     monkeypatch.setattr(confidence, "CONFIDENCE_ROWS", 37)
     assert confidence.confidence_map(*args).tobytes() == whole.tobytes()
     assert whole.tobytes() == result.confidence.tobytes()
+
+
+def test_the_scanline_kernels_load_from_the_cache_in_a_new_process(tmp_path):
+    """Each scanline kernel is a closure compiled per flag (whole range or bands); its
+    on-disk cache must key the same way in every process, or every run would compile the
+    kernels again (seconds each). A second process with the same cache compiles nothing."""
+    import subprocess
+    import sys
+
+    script = (
+        "import numpy as np\n"
+        "from numba.core import event\n"
+        "from vsmatch import optimization\n"
+        "from vsmatch.bands import Bands\n"
+        "from vsmatch.config import load_config\n"
+        "rng = np.random.default_rng(0)\n"
+        "volume = rng.random((6, 9, 8), dtype=np.float32)\n"
+        "view = rng.integers(0, 40, size=(6, 9, 3), dtype=np.uint8)\n"
+        "band = Bands(np.ones((6, 9), np.int32), np.full((6, 9), 5, np.int32), 8, 12)\n"
+        "cfg = load_config(None).scanline\n"
+        "with event.install_recorder('numba:compile') as rec:\n"
+        "    optimization.scanline_optimise(volume, view, view, cfg)\n"
+        "    optimization.scanline_optimise(volume, view, view, cfg, bands=band)\n"
+        "names = {e.data['dispatcher'].py_func.__qualname__ for _, e in rec.buffer}\n"
+        "print(sorted(n for n in names if n.startswith('_')))\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+
+    def compiled():
+        return subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                              text=True, check=True).stdout.strip()
+
+    first = compiled()
+    assert "_row_kernel.<locals>.rows" in first and "_column_kernel.<locals>.columns" in first
+    assert compiled() == "[]"
