@@ -95,9 +95,9 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
                     k32 = np.int32(k)
                     # Candidate d of this pixel is candidate d + off of the neighbour's.
                     off = base - np.int64(lo[ny, nx])
-                    first = max(np.int64(0), -off)
-                    stop = min(n, np.int64(count[ny, nx]) - off)
                     n_here = np.int64(count[ny, nx])
+                    first = max(np.int64(0), -off)
+                    stop = min(n, n_here - off)
                     if lanes and n_here <= LANES:
                         # The neighbour's band laid into a zero-padded window, then read
                         # shifted by ``off``: one vector whatever the two bands' offsets.

@@ -118,6 +118,9 @@ def _walk_steps(banded, write):
         dst = out[y, x]
         # A narrow band in a volume deep enough takes one vector a step.
         lanes = banded and n <= LANES and cost.shape[2] >= LANES
+        # ``not banded`` is tested first though its branch repeats the last one: a constant,
+        # it spares the whole-range kernels the lanes step (``lanes`` is known at run time
+        # only; without it the row kernel compiled 0.7 s longer, 4.3 -> 5.0 s).
         if prev_n < 0:  # the path starts: its cost is the matching cost
             if not banded:
                 new_min = first_whole(src, dst, cur, weight, n)
