@@ -112,3 +112,41 @@ def test_grey_views_get_a_one_channel_map():
     result = pipeline.run(left, right, max_disp=pair.max_disp)
     assert result.photometric.table.shape == (256, 1)
     assert result.photometric.before > 20 and result.photometric.residual < 3
+
+
+@pytest.mark.parametrize("shape, box", [((31, 45, 7), 9), ((4, 6, 3), 9), ((1, 12, 2), 5),
+                                        ((20, 17, 5), 8), ((3, 3, 2), 1)])
+def test_the_first_matchs_box_mean_is_opencvs_blur(rng, shape, box):
+    """The quick first match averages its costs with a parallel kernel in place of
+    cv2.blur (which runs on one core): the same values, windows wider than the image and
+    even ones included."""
+    from vsmatch._kernels.photometric import box_mean
+
+    volume = (rng.random(shape, dtype=np.float32) * 3).astype(np.float32)
+    out = np.empty_like(volume)
+    box_mean(volume, box, out)
+    assert out.tobytes() == cv2.blur(volume.copy(), (box, box)).tobytes()
+
+
+def test_matched_colours_and_the_corrected_right_view_as_numpy_takes_them(rng):
+    """The kernels that gather the matched pixels' colours and map the right view give
+    what the NumPy expressions give."""
+    left = rng.integers(0, 256, (23, 31, 3), dtype=np.uint8)
+    right = rng.integers(0, 256, (23, 31, 3), dtype=np.uint8)
+    disp = (rng.random((23, 31)) * 12).astype(np.float32)
+    matched = rng.random((23, 31)) < 0.6
+    ys, xr, at_left, at_right = photometric._matched_colours(left, right, disp, matched)
+    yy, xx = np.nonzero(matched)
+    rr = xx - np.rint(disp[yy, xx]).astype(np.int64)
+    inside = rr >= 0
+    yy, xx, rr = yy[inside], xx[inside], rr[inside]
+    assert (ys == yy).all() and (xr == rr).all()
+    assert (at_left == left[yy, xx]).all() and (at_right == right[yy, rr]).all()
+    table = rng.integers(0, 256, (256, 3), dtype=np.uint8)
+    field = (rng.normal(0, 6, (12, 16, 3))).astype(np.float32)
+    correction = photometric.Correction(table=table, residual=0.0, before=0.0, matches=1,
+                                        noise=0.0, field=field)
+    mapped = np.stack([table[right[:, :, c], c] for c in range(3)], axis=-1)
+    big = cv2.resize(field, (31, 23), interpolation=cv2.INTER_LINEAR)
+    expected = np.clip(np.rint(mapped + big), 0, 255).astype(np.uint8)
+    assert (photometric.apply(right, correction) == expected).all()

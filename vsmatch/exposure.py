@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import dataclasses
 
-import cv2
 import numpy as np
 
 from . import disparity, photometric, pyramid
+from ._kernels.photometric import box_mean
 from .config import Config
 from .images import downsample
 from .level import matching_costs
@@ -38,11 +38,6 @@ def correct_exposure(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Co
     return photometric.apply(right, correction), correction, weight
 
 
-#: Channels ``cv2.blur`` filters at once: OpenCV 5 takes at most 128 (4.x took 512); each
-#: channel is blurred on its own, so the chunk size does not change the result.
-BLUR_MAX_CHANNELS = 128
-
-
 def first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
                  ) -> tuple[np.ndarray, np.ndarray]:
     """A quick match for the photometric statistics: census and gradient costs (the colour
@@ -52,13 +47,8 @@ def first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
     volume, _, _ = matching_costs(left, right, max_disp + 1,
                                    dataclasses.replace(cfg.cost, lambda_ad=None),
                                    direction=False)
-    box = (cfg.photometric.box, cfg.photometric.box)
-    step = BLUR_MAX_CHANNELS
-    for first in range(0, volume.shape[2], step):
-        part = np.ascontiguousarray(volume[:, :, first:first + step])  # no copy if whole
-        cv2.blur(part, box, dst=part)  # in place: no new volume to map
-        if not np.shares_memory(part, volume):
-            volume[:, :, first:first + step] = part
-    disp_l, disp_r = disparity.winner_takes_all_both(volume)
+    averaged = np.empty_like(volume)
+    box_mean(volume, cfg.photometric.box, averaged)  # cv2.blur's, on every core
+    disp_l, disp_r = disparity.winner_takes_all_both(averaged)
     labels = disparity.left_right_check(disp_l, disp_r, n_disp=max_disp + 1, tolerance=0)
     return disp_l, labels == disparity.VALID

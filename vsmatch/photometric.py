@@ -18,7 +18,10 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from ._kernels.photometric import (corrected_colours, map_colours, matched_colours,
+                                   matched_count)
 from .config import PhotometricConfig
+from .images import as_channels
 from .noise import estimate_noise
 
 #: Fewer matched pixels than this and the views are left as they are.
@@ -56,26 +59,16 @@ class Correction:
         return float(np.sqrt(max(0.0, self.residual ** 2 - self.noise ** 2)))
 
 
-def _channels(image: np.ndarray) -> np.ndarray:
-    return image.reshape(image.shape[0], image.shape[1], -1)
-
-
 def learn(left: np.ndarray, right: np.ndarray, disp: np.ndarray,
           matched: np.ndarray, field_sigma: float = 0.0) -> Correction | None:
     """The right view's map onto the left's from left pixels ``matched`` at ``disp``;
     ``None`` with fewer than :data:`MIN_MATCHES` usable pixels. With ``field_sigma`` > 0,
     also the smooth field of what the map leaves (:func:`difference_field`, a Gaussian of
     ``field_sigma`` x the width), and the residual after it."""
-    ys, xs = np.nonzero(matched)
-    xr = xs - np.rint(disp[ys, xs]).astype(np.int64)
-    inside = xr >= 0
-    ys, xs, xr = ys[inside], xs[inside], xr[inside]
+    ys, xr, at_left, at_right = _matched_colours(left, right, disp, matched)
     if len(ys) < MIN_MATCHES:
         return None
-    # Flat indexes: one gather per view rather than numpy's two-index one.
     width = left.shape[1]
-    at_left = _channels(left).reshape(-1, _channels(left).shape[2])[ys * width + xs]
-    at_right = _channels(right).reshape(-1, _channels(right).shape[2])[ys * width + xr]
     levels = np.arange(256)
     table = np.empty((256, at_left.shape[1]), dtype=np.uint8)
     for c in range(at_left.shape[1]):
@@ -92,7 +85,8 @@ def learn(left: np.ndarray, right: np.ndarray, disp: np.ndarray,
     if field_sigma > 0:
         field = difference_field(at_left, mapped, ys, xr, right.shape[:2],
                                  field_sigma * width)
-        corrected = np.clip(np.rint(mapped + field[ys, xr]), 0, 255).astype(np.uint8)
+        corrected = np.empty_like(mapped)
+        corrected_colours(mapped, field, ys, xr, corrected)
         residual = _median_channel_difference(at_left, corrected)
     else:
         residual = _median_channel_difference(at_left, mapped)
@@ -100,6 +94,24 @@ def learn(left: np.ndarray, right: np.ndarray, disp: np.ndarray,
     noise = NOISE_RESIDUAL * (estimate_noise(left) + estimate_noise(right)) / 2
     return Correction(table=table, residual=residual, before=before, matches=len(ys),
                       noise=noise, field=field)
+
+
+def _matched_colours(left: np.ndarray, right: np.ndarray, disp: np.ndarray,
+                     matched: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The rows, right columns, left and right colours ((N, channels) uint8) of the
+    ``matched`` left pixels whose right pixel at ``disp`` is in view, in row-major order."""
+    left, right = as_channels(left), as_channels(right)
+    matched = np.ascontiguousarray(matched)
+    disp = np.ascontiguousarray(disp, dtype=np.float32)
+    per_row = np.empty(left.shape[0], np.int64)
+    matched_count(matched, disp, per_row)
+    first = np.concatenate(([0], np.cumsum(per_row)))
+    total = int(first[-1])
+    ys, xr = np.empty(total, np.int64), np.empty(total, np.int64)
+    at_left = np.empty((total, left.shape[2]), np.uint8)
+    at_right = np.empty_like(at_left)
+    matched_colours(left, right, matched, disp, first, ys, xr, at_left, at_right)
+    return ys, xr, at_left, at_right
 
 
 def difference_field(at_left: np.ndarray, mapped: np.ndarray, ys: np.ndarray,
@@ -150,13 +162,14 @@ def _median_channel_difference(a: np.ndarray, b: np.ndarray) -> float:
 def apply(right: np.ndarray, correction: Correction) -> np.ndarray:
     """The right view with each channel passed through the correction's table, and its
     field (resized to the view) added."""
-    table = correction.table.reshape(256, 1, -1)  # one column per channel, as cv2.LUT takes
-    mapped = cv2.LUT(right, table).reshape(right.shape)
     if correction.field is None:
-        return mapped
+        table = correction.table.reshape(256, 1, -1)  # a column a channel, as cv2.LUT takes
+        return cv2.LUT(right, table).reshape(right.shape)
     field = cv2.resize(correction.field, right.shape[1::-1], interpolation=cv2.INTER_LINEAR)
-    field = field.reshape(right.shape)
-    return np.clip(np.rint(mapped + field), 0, 255).astype(np.uint8)
+    out = np.empty(right.shape, np.uint8)
+    map_colours(as_channels(right), correction.table, field.reshape(out.shape[:2] + (-1,)),
+                as_channels(out))
+    return out
 
 
 def colour_weight(residual: float, cfg: PhotometricConfig) -> float:
