@@ -17,11 +17,11 @@ def cache_is_cold() -> bool:
     import sys
     from pathlib import Path
 
-    from .aggregate import sum_along_arms
+    from .aggregate import sum_along_rows
 
     tag = f"py{sys.version_info.major}{sys.version_info.minor}"
     try:
-        folder = Path(sum_along_arms._cache.cache_path)
+        folder = Path(sum_along_rows._cache.cache_path)
     except AttributeError:  # a Numba without this cache attribute: assume compiled
         return False
     return not any(folder.glob(f"aggregate.*.{tag}.nbi"))
