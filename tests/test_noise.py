@@ -149,3 +149,24 @@ def test_a_level_down_white_noise_shrinks_as_the_pyramid_factor_says():
     field = np.random.default_rng(0).standard_normal((600, 600)).astype(np.float32) * 20
     measured = cv2.pyrDown(field)[10:-10, 10:-10].std() / field.std()
     assert LEVEL_NOISE_FACTOR == pytest.approx(measured, rel=0.03)
+
+
+@pytest.mark.parametrize("shape", [(61, 83, 3), (40, 40), (9, 200, 3), (12, 7)])
+def test_the_block_means_kernel_gives_numpys_estimate(rng, shape):
+    """The noise estimate's block means come from a parallel kernel; on 8-bit views
+    (integer responses, exact sums) the estimate is NumPy's to the last bit."""
+    import cv2
+
+    from vsmatch import noise
+    from vsmatch.images import to_grey
+
+    view = np.clip(rng.normal(120, 40, shape), 0, 255).astype(np.uint8)
+    response = np.abs(cv2.filter2D(to_grey(view), -1, noise._NOISE_KERNEL))[1:-1, 1:-1]
+    height, width = (n - n % 8 for n in response.shape)
+    if height and width:
+        means = response[:height, :width].reshape(height // 8, 8, width // 8, 8).mean(
+            axis=(1, 3))
+    else:
+        means = np.array([response.mean()])
+    expected = np.sqrt(np.pi / 2) * np.percentile(means, 2.0) / 6.0 / noise._PERCENTILE_BIAS
+    assert noise.estimate_noise(view) == float(expected)

@@ -15,6 +15,7 @@ import dataclasses
 import cv2
 import numpy as np
 
+from ._kernels.noise import block_means
 from .config import Config
 from .images import to_grey
 
@@ -43,8 +44,8 @@ def estimate_noise(image: np.ndarray, *, block: int = 8, percentile: float = 2.0
     if height == 0 or width == 0:
         means = np.array([response.mean()]) if response.size else np.zeros(1)
     else:
-        means = response[:height, :width].reshape(
-            height // block, block, width // block, block).mean(axis=(1, 3))
+        means = np.empty((height // block, width // block), np.float32)
+        block_means(np.ascontiguousarray(response), block, means)
     return float(np.sqrt(np.pi / 2.0) * np.percentile(means, percentile) / 6.0
                  / _PERCENTILE_BIAS)
 

@@ -80,9 +80,12 @@ def bands_from_coarse(coarse: np.ndarray, coarse_labels: np.ndarray | None,
     widened by ``band`` and one more each side (the sub-pixel fit's neighbours), at most
     ``max_band`` of them around twice its own coarse disparity; none where the coarse
     level has no estimate."""
-    low, high = (upsample_nearest(v, shape) for v in coarse_extremes(coarse, coarse_labels))
-    centre = upsample_nearest(coarse, shape)
+    low, high = coarse_extremes(coarse, coarse_labels)
     widen = cfg.band + 1
+    # Pixel by pixel of the coarse maps, then each coarse pixel's band repeated over its
+    # block: the same as on the maps repeated first, for a quarter of the work.
     with np.errstate(invalid="ignore"):
-        return bands.around(2 * low - widen, 2 * high + widen, 2 * centre, max_disp + 1,
-                            cfg.max_band)
+        small = bands.around(2 * low - widen, 2 * high + widen, 2 * coarse, max_disp + 1,
+                             cfg.max_band)
+    return bands.Bands(upsample_nearest(small.lo, shape), upsample_nearest(small.count, shape),
+                       small.width, small.n_disp)
