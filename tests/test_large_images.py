@@ -325,15 +325,6 @@ def test_confidence_in_row_blocks_is_the_same_bytes(teddy, monkeypatch):
     monkeypatch.setattr(confidence, "CONFIDENCE_ROWS", 37)
     assert confidence.confidence_map(*args).tobytes() == whole.tobytes()
     assert whole.tobytes() == result.confidence.tobytes()
-    # Blocks side by side on threads (thin ones: several a thread), each block's kernels
-    # on one thread: the same bytes again.
-    from vsmatch import threads
-    from vsmatch.bench import thread_count
-
-    monkeypatch.setattr(threads, "MIN_BLOCK_ROWS", 5)
-    for count in (1, 2):
-        with thread_count(count):
-            assert confidence.confidence_map(*args).tobytes() == whole.tobytes()
 
 
 def test_the_scanline_kernels_load_from_the_cache_in_a_new_process(tmp_path):

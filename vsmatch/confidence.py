@@ -25,7 +25,6 @@ confident 5 %, 10 %, ... 100 % of the pixels and average the error rate of what 
 
 from __future__ import annotations
 
-import functools
 import json
 from functools import lru_cache
 from importlib import resources
@@ -33,7 +32,6 @@ from importlib import resources
 import cv2
 import numpy as np
 
-from . import threads
 from ._kernels.confidence import cost_curve, logistic
 from .bands import Bands, of
 from .disparity import VALID, MISMATCHED
@@ -132,7 +130,7 @@ def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
 #: the distance features reach MAX_DISTANCE (chamfer distances of at least 0.955 px a
 #: step: 17 rows), the matchability gate half its window, the blob test half its window.
 #: Blocks give the same bytes as one piece (a test); they bound the features' memory
-#: (48 bytes a pixel) on camera-size pairs, and run side by side (``vsmatch.threads``).
+#: (48 bytes a pixel) on camera-size pairs.
 CONFIDENCE_ROWS = 512
 CONFIDENCE_MARGIN = 24
 
@@ -142,23 +140,19 @@ def confidence_map(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
     """Each pixel's confidence in [0, 1] (float32): :func:`pixel_features`,
     :func:`combine`, and the caps at the range's ends, on textureless blobs and on pixels
     without texture, in blocks of :data:`CONFIDENCE_ROWS` rows."""
-    height = disparity.shape[0]
-    blocks = list(row_blocks(height, threads.block_height(height, CONFIDENCE_ROWS),
-                             CONFIDENCE_MARGIN))
-
-    def block(top: int, bottom: int, y0: int, y1: int) -> np.ndarray:
+    out = np.empty(disparity.shape, np.float32)
+    for top, bottom, y0, y1 in row_blocks(disparity.shape[0], CONFIDENCE_ROWS,
+                                          CONFIDENCE_MARGIN):
         rows = slice(y0, y1)
         disp = disparity[rows]
         features = pixel_features(disp, None if labels is None else labels[rows],
                                   left[rows], {k: v[rows] for k, v in curve.items()})
-        confidence = combine(features, disp)
-        cap_range_ends(confidence, disp, n_disp)
-        cap_flat_blobs(confidence, disp, features[FEATURES.index("texture")])
-        cap_textureless(confidence, features[FEATURES.index("texture")])
-        return confidence[top - y0:bottom - y0]
-
-    parts = threads.run_all([functools.partial(block, *b) for b in blocks])
-    return np.concatenate(parts) if parts else np.empty(disparity.shape, np.float32)
+        block = combine(features, disp)
+        cap_range_ends(block, disp, n_disp)
+        cap_flat_blobs(block, disp, features[FEATURES.index("texture")])
+        cap_textureless(block, features[FEATURES.index("texture")])
+        out[top:bottom] = block[top - y0:bottom - y0]
+    return out
 
 
 def log1p_into(values: np.ndarray, out: np.ndarray) -> None:

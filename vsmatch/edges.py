@@ -15,11 +15,8 @@ view has texture (a blank wall's window tells nothing).
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
-from . import threads
 from ._kernels.edges import weigh_edge_sides
 from .config import EdgesConfig
 from .images import as_channels, grey_levels
@@ -31,7 +28,7 @@ SOBEL_GAIN = 8.0
 #: Rows weighed at a time: the gradients and the texture are made for a block and the rows
 #: around it its windows read (``edges.radius``, and :data:`FILTER_REACH` more for the
 #: filters behind them), so the memory is bounded whatever the image's height. Blocks give
-#: the same bytes as one piece (a test), and run side by side (``vsmatch.threads``).
+#: the same bytes as one piece (a test).
 EDGE_ROWS = 512
 #: Rows beyond a window's that its values depend on: the Sobel's one and the texture's
 #: 5 x 5 mean's two.
@@ -45,15 +42,10 @@ def weigh_edges(disp: np.ndarray, confidence: np.ndarray, left: np.ndarray,
     pixel's at most ``cfg.moved_confidence`` (float32, new arrays)."""
     disp = np.ascontiguousarray(disp, dtype=np.float32)
     out = np.empty_like(disp)
-    height = disp.shape[0]
-
-    def block(top: int, bottom: int, y0: int, y1: int) -> None:
+    for top, bottom, y0, y1 in row_blocks(disp.shape[0], EDGE_ROWS, cfg.radius + FILTER_REACH):
         rows = slice(y0, y1)
         out[top:bottom] = _weigh_block(disp[rows], left[rows], right[rows],
                                        cfg)[top - y0:bottom - y0]
-
-    threads.run_all([functools.partial(block, *b) for b in row_blocks(
-        height, threads.block_height(height, EDGE_ROWS), cfg.radius + FILTER_REACH)])
     moved = np.isfinite(disp) & (out != disp)
     confidence = confidence.astype(np.float32)  # a copy
     np.minimum(confidence, np.float32(cfg.moved_confidence), out=confidence, where=moved)
