@@ -10,11 +10,11 @@ import cv2
 import numpy as np
 
 from ._kernels.census import census_transform as _census_kernel
-from ._kernels.cost import matching_cost_volume
+from ._kernels.cost import matching_cost_volume, view_terms
 from . import volumes
 from .bands import Bands
 from .config import CostConfig
-from .images import as_channels, mirrored
+from .images import as_channels
 
 
 def census_transform(grey: np.ndarray, *, width: int = 9, height: int = 7,
@@ -62,25 +62,30 @@ GRADIENT_STEPS = 4
 def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
                census_l: np.ndarray, census_r: np.ndarray,
                grad_l: np.ndarray, grad_r: np.ndarray, cfg: CostConfig,
-               planar: bool = False, colour_weight: float = 1.0) -> tuple:
+               colour_weight: float = 1.0) -> tuple:
     """The arguments the cost kernels take after the output: each view's census, quantised
-    gradient and colour (the right view's reversed along x), the three lookup tables (an
-    empty one switches its term off) and the maximum cost. ``planar``: the colours as
-    planes (C, H, W) rather than (H, W, C); ``colour_weight``: what the exposure correction
-    leaves of the colour term (times ``cost.ad_weight``)."""
+    gradient and colour planes (C, H, W) (the right view's reversed along x), the three
+    lookup tables (an empty one switches its term off) and the maximum cost.
+    ``colour_weight``: what the exposure correction leaves of the colour term (times
+    ``cost.ad_weight``)."""
     n_bits = cfg.census_width * cfg.census_height - 1
     census_table = rho(np.arange(n_bits + 1), cfg.lambda_census).astype(np.float32)
-    colour_l, colour_r = (as_channels(c).astype(np.int16) for c in (colour_l, colour_r))
-    channels = colour_l.shape[2]
-    if planar:
-        colour_l, colour_r = (np.ascontiguousarray(np.moveaxis(c, 2, 0))
-                              for c in (colour_l, colour_r))
-    q_l = np.round(np.asarray(grad_l, np.float32) * GRADIENT_STEPS).astype(np.int32)
-    q_r = np.round(np.asarray(grad_r, np.float32) * GRADIENT_STEPS).astype(np.int32)
+    colour_l, colour_r = as_channels(colour_l), as_channels(colour_r)
+    height, width, channels = colour_l.shape
+    planes_l = np.empty((channels, height, width), np.int16)
+    planes_r_rev = np.empty_like(planes_l)
+    census_r_rev = np.empty_like(census_r)
+    q_l = np.empty((height, width), np.int32)
+    q_r_rev = np.empty_like(q_l)
+    row_max = np.zeros(height, np.int64)
+    view_terms(colour_l, colour_r, census_r,
+               *(np.ascontiguousarray(g, dtype=np.float32) for g in (grad_l, grad_r)),
+               np.float32(GRADIENT_STEPS), planes_l, planes_r_rev, census_r_rev, q_l,
+               q_r_rev, row_max)
     if cfg.lambda_gradient is None:
         grad_table = np.empty(0, np.float32)
     else:
-        steps = np.arange(max(q_l.max(), q_r.max()) + 1) / GRADIENT_STEPS
+        steps = np.arange(int(row_max.max(initial=0)) + 1) / GRADIENT_STEPS
         grad_table = rho(steps, cfg.lambda_gradient).astype(np.float32)
     ad_weight = cfg.ad_weight * colour_weight
     if cfg.lambda_ad is None or ad_weight == 0:
@@ -88,10 +93,8 @@ def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
     else:
         ad_table = (ad_weight * rho(np.arange(255 * channels + 1) / channels,
                                     cfg.lambda_ad)).astype(np.float32)
-    colour_r_rev = mirrored(colour_r, axis=-1 if planar else 1)
-    return (census_l, mirrored(census_r, axis=1), q_l, mirrored(q_r, axis=1),
-            colour_l, colour_r_rev, census_table, grad_table, ad_table,
-            np.float32(max_cost(cfg, colour_weight)))
+    return (census_l, census_r_rev, q_l, q_r_rev, planes_l, planes_r_rev, census_table,
+            grad_table, ad_table, np.float32(max_cost(cfg, colour_weight)))
 
 
 def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
@@ -106,6 +109,6 @@ def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
         bands = Bands.full(census_l.shape, n_disp)
     out = volumes.volume("cost", census_l.shape + (bands.width,))
     matching_cost_volume(*cost_terms(colour_l, colour_r, census_l, census_r, grad_l, grad_r,
-                                     cfg, planar=True, colour_weight=colour_weight),
+                                     cfg, colour_weight=colour_weight),
                          bands.lo, bands.count, out)
     return out

@@ -66,3 +66,27 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
                 costs[d] = c
             for d in range(last, n_disp):
                 costs[d] = max_cost
+
+
+@njit(**KERNEL_OPTIONS)
+def view_terms(colour_l, colour_r, census_r, grad_l, grad_r, steps, planes_l, planes_r_rev,
+               census_r_rev, q_l, q_r_rev, row_max):
+    """What :func:`matching_cost_volume` reads of the views: the colours (H, W, C) as int16
+    planes (C, H, W), the gradients quantised to ``round(g * steps)`` (int32), the right
+    view's census, gradients and colours reversed along x, and each row's largest
+    quantised gradient (``row_max``)."""
+    height, width, channels = colour_l.shape
+    for y in prange(height):
+        largest = 0
+        for x in range(width):
+            xr = width - 1 - x
+            for c in range(channels):
+                planes_l[c, y, x] = colour_l[y, x, c]
+                planes_r_rev[c, y, xr] = colour_r[y, x, c]
+            census_r_rev[y, xr] = census_r[y, x]
+            ql = np.int32(np.rint(grad_l[y, x] * steps))
+            qr = np.int32(np.rint(grad_r[y, x] * steps))
+            q_l[y, x] = ql
+            q_r_rev[y, xr] = qr
+            largest = max(largest, ql, qr)
+        row_max[y] = largest
