@@ -290,3 +290,33 @@ def confidence_map(disparity, labels, left, curve, n_disp):
     confidence.cap_flat_blobs(out, disparity, texture)
     confidence.cap_textureless(out, texture)
     return out
+
+
+def plane_values(sums, min_weight, min_spread):
+    """vsmatch._kernels.planes.plane_values a pixel at a time, its cases as branches."""
+    height, width, _ = sums.shape
+    cx, cy = (width - 1) / 2.0, (height - 1) / 2.0
+    out = np.full((height, width), np.nan, np.float32)
+    spread = np.full((height, width), np.nan, np.float32)
+    for y in range(height):
+        for x in range(width):
+            m = sums[y, x].astype(np.float64)
+            w = m[0]
+            if not w > 0 or w < float(np.float32(min_weight) * sums[y, x, 10]):
+                continue
+            mu, mv, md = m[1] / w, m[2] / w, m[6] / w
+            suu, suv, svv = m[3] / w - mu * mu, m[4] / w - mu * mv, m[5] / w - mv * mv
+            sud, svd = m[7] / w - mu * md, m[8] / w - mv * md
+            a = b = 0.0
+            det = suu * svv - suv * suv
+            if suu >= min_spread and svv >= min_spread and det > 1e-6 * suu * svv:
+                a = (sud * svv - svd * suv) / det
+                b = (svd * suu - sud * suv) / det
+            elif suu >= min_spread:
+                a = sud / suu
+            elif svv >= min_spread:
+                b = svd / svv
+            out[y, x] = np.float32(md + a * ((x - cx) - mu) + b * ((y - cy) - mv))
+            spread[y, x] = np.float32(np.sqrt(max(m[9] / w - md * md - a * sud - b * svd,
+                                                  0.0)))
+    return out, spread

@@ -97,3 +97,28 @@ def test_subpixel_matches_reference(rng):
     volume = rng.random((9, 12, 7), dtype=np.float32)
     np.testing.assert_allclose(refinement.subpixel(disp, volume),
                                reference.subpixel(disp, volume), rtol=1e-5, atol=1e-6)
+
+
+def test_plane_values_match_reference(rng):
+    """The planes' solve is written as selects so that it vectorises; it gives the values
+    of the pixel-at-a-time branches, empty, too light, one-axis and full regions alike."""
+    from vsmatch._kernels.planes import N_MOMENTS, plane_moments, plane_values, region_sums
+
+    height, width = 23, 31
+    disp = (rng.random((height, width)) * 40).astype(np.float32)
+    disp[5, :] = np.nan
+    weight = (rng.random((height, width)) < 0.7).astype(np.float32)
+    moments = np.empty((height, width, N_MOMENTS), np.float32)
+    plane_moments(disp, weight, moments)
+    arms = rng.integers(0, 4, (4, height, width)).astype(np.uint8)
+    arms[:, :, :10] = 0  # single pixels: no spread along either axis
+    arms[0:2, 10:, 10:20] = 0  # columns only: a constant along u
+    from vsmatch.aggregation import keep_arms_inside
+    keep_arms_inside(arms)
+    region_sums(moments, arms, np.empty_like(moments), moments)
+    got = np.empty((height, width), np.float32), np.empty((height, width), np.float32)
+    plane_values(moments, np.float32(0.5), np.float32(1.0), *got)
+    want = reference.plane_values(moments, 0.5, 1.0)
+    for g, w in zip(got, want):
+        assert g.tobytes() == w.tobytes()
+    assert np.isnan(got[0]).any() and np.isfinite(got[0]).any()
