@@ -235,63 +235,6 @@ def fill(disp, labels, image, steps_y, steps_x, max_search):
             out[y, x] = best
     return out
 
-
-def confidence_features(disparity, labels, left, curve):
-    """vsmatch.confidence.pixel_features in NumPy and OpenCV calls, one feature at a time."""
-    import cv2
-
-    from vsmatch.confidence import FEATURES, MAX_DISTANCE
-    from vsmatch.disparity import MISMATCHED, VALID
-    from vsmatch.images import grey_levels
-    from vsmatch.sensitivity import texture
-
-    def log1p(values):
-        return cv2.log(cv2.add(values.astype(np.float32), 1.0))
-
-    def distance_to(mask):
-        if not mask.any():
-            return np.full(mask.shape, MAX_DISTANCE, np.float32)
-        distance = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 3)
-        return np.minimum(distance, MAX_DISTANCE).astype(np.float32)
-
-    shape = disparity.shape
-    out = np.empty((len(FEATURES),) + shape, np.float32)
-    row = {name: out[k] for k, name in enumerate(FEATURES)}
-    row["bias"].fill(1.0)
-    np.clip(curve["margin"], 0, 1, out=row["margin"])
-    np.multiply(row["margin"], row["margin"], out=row["margin_sq"])
-    np.clip(curve["below_mean"], 0, 1, out=row["below_mean"])
-    np.clip(curve["raw_margin"], 0, 1, out=row["raw_margin"])
-    row["support"][:] = curve["support"]
-    valid = np.ones(shape, bool) if labels is None else labels == VALID
-    row["valid"][:] = valid
-    row["mismatched"][:] = False if labels is None else labels == MISMATCHED
-    row["fill_distance"][:] = log1p(distance_to(valid))
-    row["texture"][:] = log1p(texture(grey_levels(left)))
-    finite = np.where(np.isfinite(disparity), disparity, 0).astype(np.float32)
-    jumps = np.zeros(shape, bool)
-    jumps[:, 1:] |= np.abs(np.diff(finite, axis=1)) > 1
-    jumps[1:, :] |= np.abs(np.diff(finite, axis=0)) > 1
-    row["jump_distance"][:] = log1p(distance_to(jumps))
-    inside = np.arange(shape[1], dtype=np.float32)[None, :] - finite
-    row["view_edge"][:] = log1p(np.clip(inside, 0, MAX_DISTANCE))
-    return out
-
-
-def confidence_map(disparity, labels, left, curve, n_disp):
-    """vsmatch.confidence.confidence_map in one piece from NumPy's steps: the features,
-    the model, its gate and the caps, each a function of vsmatch.confidence."""
-    from vsmatch import confidence
-
-    features = confidence_features(disparity, labels, left, curve)
-    out = confidence.combine(features, disparity)
-    texture = features[confidence.FEATURES.index("texture")]
-    confidence.cap_range_ends(out, disparity, n_disp)
-    confidence.cap_flat_blobs(out, disparity, texture)
-    confidence.cap_textureless(out, texture)
-    return out
-
-
 def plane_values(sums, min_weight, min_spread):
     """vsmatch._kernels.planes.plane_values a pixel at a time, its cases as branches."""
     height, width, _ = sums.shape

@@ -256,25 +256,3 @@ def test_a_pixel_without_texture_stays_out_of_the_cloud(lowest_cloud_threshold):
     assert np.all(conf[:, :15] == np.float32(confidence.TEXTURELESS_CONFIDENCE))
     assert confidence.TEXTURELESS_CONFIDENCE < lowest_cloud_threshold
     assert np.all(conf[:, 25:35] == np.float32(0.99))
-
-
-@pytest.mark.parametrize("config", ["default", "fast"])
-def test_the_confidence_kernels_give_numpys_features_and_map(data_dir, config):
-    """The features and the model's gate and caps are computed by kernels; they give the
-    bytes of the NumPy steps they stand for (tests/reference.py), on a real pair and with
-    no labels, NaN margins and jumps at the border."""
-    import reference
-
-    scene = datasets.load_dataset("middlebury2", data_dir, names=["teddy"])[0]
-    result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp, config=config)
-    curve = dict(result.curve)
-    curve["margin"] = curve["margin"].copy()
-    curve["margin"][::37, ::11] = np.nan
-    disparity = result.disparity.copy()
-    disparity[::29, ::13] = np.inf
-    for labels in (result.labels, None):
-        args = (disparity, labels, scene.left, curve)
-        assert (confidence.pixel_features(*args).tobytes()
-                == reference.confidence_features(*args).tobytes())
-        assert (confidence.confidence_map(*args, scene.max_disp + 1).tobytes()
-                == reference.confidence_map(*args, scene.max_disp + 1).tobytes())

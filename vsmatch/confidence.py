@@ -32,8 +32,7 @@ from importlib import resources
 import cv2
 import numpy as np
 
-from ._kernels.confidence import cost_curve, finish, logistic
-from ._kernels.confidence import pixel_features as kernel_features
+from ._kernels.confidence import cost_curve, logistic
 from .bands import Bands, of
 from .disparity import VALID, MISMATCHED
 from .images import grey_levels
@@ -100,34 +99,31 @@ def curve_features(curves: tuple[np.ndarray, ...],
 
 def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.ndarray,
                    curve: dict[str, np.ndarray]) -> np.ndarray:
-    """The :data:`FEATURES` of every pixel, ``(len(FEATURES), H, W)`` float32: a kernel
-    the pixel-by-pixel ones, OpenCV the distances, the texture and the logarithms
-    (``tests/reference.py`` holds the same in NumPy)."""
+    """The :data:`FEATURES` of every pixel, ``(len(FEATURES), H, W)`` float32."""
     shape = disparity.shape
     out = np.empty((len(FEATURES),) + shape, np.float32)
     row = {name: out[k] for k, name in enumerate(FEATURES)}
-    not_valid, not_jump = np.empty(shape, np.uint8), np.empty(shape, np.uint8)
-    counts = np.empty((shape[0], 2), np.int64)
-    kernel_features(np.ascontiguousarray(disparity, dtype=np.float32),
-                    _NO_LABELS if labels is None else np.ascontiguousarray(labels),
-                    VALID, MISMATCHED, *(np.ascontiguousarray(curve[k], dtype=np.float32)
-                                         for k in ("margin", "below_mean", "raw_margin",
-                                                   "support")),
-                    np.float32(MAX_DISTANCE), out, not_valid, not_jump, counts)
-    valid, jumps = counts.sum(axis=0)
-    for name, outside, none in (("fill_distance", not_valid, valid == 0),
-                                ("jump_distance", not_jump, jumps == 0)):
-        log1p_into(_distance_to_zero(outside, none), row[name])
+    row["bias"].fill(1.0)
+    np.clip(curve["margin"], 0, 1, out=row["margin"])
+    np.multiply(row["margin"], row["margin"], out=row["margin_sq"])
+    np.clip(curve["below_mean"], 0, 1, out=row["below_mean"])
+    np.clip(curve["raw_margin"], 0, 1, out=row["raw_margin"])
+    row["support"][:] = curve["support"]
+    valid = np.ones(shape, bool) if labels is None else labels == VALID
+    row["valid"][:] = valid
+    row["mismatched"][:] = False if labels is None else labels == MISMATCHED
+    log1p_into(_distance_to(valid), row["fill_distance"])
     log1p_into(texture(grey_levels(left)), row["texture"])
-    cv2.log(row["view_edge"], dst=row["view_edge"])  # the kernel added the 1
+    finite = np.where(np.isfinite(disparity), disparity, 0).astype(np.float32)
+    jumps = np.zeros(shape, bool)
+    jumps[:, 1:] |= np.abs(np.diff(finite, axis=1)) > 1
+    jumps[1:, :] |= np.abs(np.diff(finite, axis=0)) > 1
+    log1p_into(_distance_to(jumps), row["jump_distance"])
+    # How far inside the right view the match lies (near its left edge, little of the
+    # support region has a partner).
+    inside = np.arange(shape[1], dtype=np.float32)[None, :] - finite
+    log1p_into(np.clip(inside, 0, MAX_DISTANCE), row["view_edge"])
     return out
-
-
-#: The kernels' order of the features (``_kernels.confidence.pixel_features``).
-assert FEATURES == ("bias", "margin", "margin_sq", "below_mean", "valid", "mismatched",
-                    "fill_distance", "support", "texture", "jump_distance", "view_edge",
-                    "raw_margin")
-_NO_LABELS = np.empty((0, 0), np.uint8)
 
 
 #: Rows of the confidence computed at a time, and the rows around them each block reads:
@@ -151,26 +147,12 @@ def confidence_map(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
         disp = disparity[rows]
         features = pixel_features(disp, None if labels is None else labels[rows],
                                   left[rows], {k: v[rows] for k, v in curve.items()})
-        block = _combined_and_capped(features, np.ascontiguousarray(disp), n_disp)
+        block = combine(features, disp)
+        cap_range_ends(block, disp, n_disp)
+        cap_flat_blobs(block, disp, features[FEATURES.index("texture")])
+        cap_textureless(block, features[FEATURES.index("texture")])
         out[top:bottom] = block[top - y0:bottom - y0]
     return out
-
-
-def _combined_and_capped(features: np.ndarray, disparity: np.ndarray,
-                         n_disp: int) -> np.ndarray:
-    """:func:`combine`, then :func:`cap_range_ends`, :func:`cap_flat_blobs` and
-    :func:`cap_textureless`, the pixel-by-pixel work in one kernel (the same bytes)."""
-    confidence = np.empty(features.shape[1:], np.float32)
-    logistic(features, model_weights(), confidence)
-    local = [cv2.blur(features[FEATURES.index(name)], (GATE_WINDOW, GATE_WINDOW))
-             for name in ("margin", "raw_margin")]
-    high, low = _window_extremes(disparity)
-    finish(confidence, *local, np.array([GATE_FROM, GATE_TO, RAW_GATE_FROM, RAW_GATE_TO]),
-           disparity, features[FEATURES.index("texture")], high, low, n_disp,
-           np.float32(RANGE_END_CONFIDENCE), np.float32(BLOB_SPREAD),
-           np.float32(BLOB_TEXTURE), np.float32(np.log1p(NO_TEXTURE)),
-           np.float32(TEXTURELESS_CONFIDENCE))
-    return confidence
 
 
 def log1p_into(values: np.ndarray, out: np.ndarray) -> None:
@@ -180,13 +162,12 @@ def log1p_into(values: np.ndarray, out: np.ndarray) -> None:
     cv2.log(cv2.add(values, 1.0), dst=out)
 
 
-def _distance_to_zero(outside: np.ndarray, none: bool) -> np.ndarray:
-    """Distance (pixels, at most MAX_DISTANCE) from each pixel to the nearest where
-    ``outside`` (uint8) is 0; ``none``: there is no such pixel."""
-    if none:
-        return np.full(outside.shape, MAX_DISTANCE, np.float32)
-    distance = cv2.distanceTransform(outside, cv2.DIST_L2, 3)
-    return np.minimum(distance, np.float32(MAX_DISTANCE), out=distance)
+def _distance_to(mask: np.ndarray) -> np.ndarray:
+    """Distance (pixels, at most MAX_DISTANCE) from each pixel to the nearest True one."""
+    if not mask.any():
+        return np.full(mask.shape, MAX_DISTANCE, np.float32)
+    distance = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 3)
+    return np.minimum(distance, MAX_DISTANCE).astype(np.float32)
 
 
 def term_cells() -> list[tuple[int, int]]:
@@ -269,19 +250,13 @@ def cap_flat_blobs(confidence: np.ndarray, disparity: np.ndarray,
                    texture: np.ndarray) -> None:
     """Cap, in place, the confidence of blobs of one value in textureless areas at
     :data:`RANGE_END_CONFIDENCE` (below the cloud's threshold)."""
-    high, low = _window_extremes(disparity)
-    blob = (high - low <= BLOB_SPREAD) & (texture < BLOB_TEXTURE)
-    _cap(confidence, blob, RANGE_END_CONFIDENCE)
-
-
-def _window_extremes(disparity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The largest and smallest disparity of each :data:`BLOB_WINDOW` square (float32);
-    an invalid pixel counts as far from every value: no blob around it."""
     finite = np.isfinite(disparity)
     kernel = np.ones((BLOB_WINDOW, BLOB_WINDOW), np.uint8)
+    # An invalid pixel counts as far from every value: no blob around it.
     high = cv2.dilate(np.where(finite, disparity, -1e9).astype(np.float32), kernel)
     low = cv2.erode(np.where(finite, disparity, 1e9).astype(np.float32), kernel)
-    return high, low
+    blob = (high - low <= BLOB_SPREAD) & (texture < BLOB_TEXTURE)
+    _cap(confidence, blob, RANGE_END_CONFIDENCE)
 
 
 #: A pixel without texture (the texture feature below log(1 + NO_TEXTURE): under an eighth
