@@ -47,8 +47,8 @@ def test_cache_is_cold_looks_where_numba_caches(tmp_path):
     import subprocess
     import sys
     script = ("from vsmatch._kernels import cache_is_cold\n"
-              "from vsmatch._kernels.aggregate import sum_along_rows\n"
-              "print(cache_is_cold(), sum_along_rows._cache.cache_path)\n")
+              "from vsmatch._kernels.aggregate import sum_along_arms\n"
+              "print(cache_is_cold(), sum_along_arms._cache.cache_path)\n")
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
 
     def ask():

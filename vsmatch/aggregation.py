@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from ._kernels.aggregate import LANES, sum_along_rows, sum_down_columns, sum_over_arms
+from ._kernels.aggregate import LANES, sum_along_arms, sum_over_arms
 from ._kernels.arms import DOWN, LEFT, RIGHT, UP
 from ._kernels.arms import cross_arms as _cross_arms_kernel
 from .bands import Bands, of
@@ -98,10 +98,8 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
         elif method == "direct":
             sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, bands.lo,
                           bands.count, none, none, out)
-        elif along_rows:
-            sum_along_rows(src, arms_l, arms_r_rev, normalise, out)
         else:
-            sum_down_columns(src, arms_l, arms_r_rev, normalise, out)
+            sum_along_arms(src, arms_l, arms_r_rev, along_rows, normalise, out)
 
     for it in range(iterations):
         rows_first = it % 2 == 0

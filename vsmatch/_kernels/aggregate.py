@@ -29,8 +29,7 @@ def _arms_across(arms_l, arms_r_rev, first_lo, first_hi, y, x, base):
 @njit(**KERNEL_OPTIONS)
 def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, counts_out,
                   counts_in, out):
-    """:func:`sum_along_rows` and :func:`sum_down_columns` by direct sums: each pixel adds
-    its arm pixels' costs.
+    """:func:`sum_along_arms` by direct sums: each pixel adds its arm pixels' costs.
 
     The work is proportional to the arm lengths rather than to one running sum per pixel,
     and every loop runs over d, contiguous and branch-free, so LLVM vectorises it: faster
@@ -159,86 +158,51 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
 
 
 @njit(**KERNEL_OPTIONS)
-def sum_along_rows(src, arms_l, arms_r_rev, normalise, out):
-    """One pass of cross-region aggregation over a (H, W, D) volume along each pixel's
-    combined horizontal arm, by 1-D running sums (:func:`sum_down_columns` the same along
-    the vertical arm).
+def sum_along_arms(src, arms_l, arms_r_rev, along_rows, normalise, out):
+    """One pass of cross-region aggregation over a (H, W, D) volume, by 1-D running sums.
 
     ``arms_l``: (4, H, W) arm lengths; ``arms_r_rev``: the right view's, reversed and
-    padded as :func:`sum_over_arms` takes them. At disparity d an arm is the shorter of the
-    left pixel's and of the right pixel (y, x - d)'s. ``normalise``: this is the second
-    pass of the cross; divide by the number of pixels of the whole region, i.e. the
+    padded as :func:`sum_over_arms` takes them. ``along_rows``: sum ``src`` over each
+    pixel's combined horizontal arm (else vertical); at disparity d an arm is the shorter
+    of the left pixel's and of the right pixel (y, x - d)'s. ``normalise``: this is the
+    second pass of the cross; divide by the number of pixels of the whole region, i.e. the
     running sum of the first pass's arm lengths.
     """
     height, width, n_disp = src.shape
-    for y in prange(height):
+    # Lines are rows or columns; plain int arithmetic keeps Numba's parfor typing integral.
+    n_lines = height * along_rows + width * (1 - along_rows)
+    length = width * along_rows + height * (1 - along_rows)
+    lo_arm = LEFT if along_rows else UP
+    hi_arm = RIGHT if along_rows else DOWN
+    first_lo = UP if along_rows else LEFT
+    first_hi = DOWN if along_rows else RIGHT
+    for line in prange(n_lines):
         # Running sums in float64: a float32 sum over a long line would lose the low bits
         # that separate close costs.
-        sums = np.empty((width + 1, n_disp))
-        counts = np.empty((width + 1, n_disp) if normalise else (1, 1))
+        sums = np.empty((length + 1, n_disp))
+        counts = np.empty((length + 1, n_disp) if normalise else (1, 1))
         sums[0, :] = 0.0
         counts[0, :] = 0.0
-        for x in range(width):
-            here = src[y, x]
+        for i in range(length):
+            y = line * along_rows + i * (1 - along_rows)
+            x = i * along_rows + line * (1 - along_rows)
             for d in range(n_disp):
-                sums[x + 1, d] = sums[x, d] + here[d]
+                sums[i + 1, d] = sums[i, d] + src[y, x, d]
             if normalise:
-                f_lo, f_hi, g_lo, g_hi = _arms_across(arms_l, arms_r_rev, UP, DOWN, y, x, 0)
+                f_lo, f_hi, g_lo, g_hi = _arms_across(arms_l, arms_r_rev, first_lo, first_hi,
+                                                      y, x, 0)
                 for d in range(n_disp):
-                    counts[x + 1, d] = (counts[x, d] + 1 + _shorter(f_lo, g_lo[d])
+                    counts[i + 1, d] = (counts[i, d] + 1 + _shorter(f_lo, g_lo[d])
                                         + _shorter(f_hi, g_hi[d]))
-        for x in range(width):
-            a_lo, a_hi, r_lo, r_hi = _arms_across(arms_l, arms_r_rev, LEFT, RIGHT, y, x, 0)
+        for i in range(length):
+            y = line * along_rows + i * (1 - along_rows)
+            x = i * along_rows + line * (1 - along_rows)
+            a_lo, a_hi, r_lo, r_hi = _arms_across(arms_l, arms_r_rev, lo_arm, hi_arm, y, x, 0)
             result = out[y, x]
             for d in range(n_disp):
-                lo = x - _shorter(a_lo, r_lo[d])
-                hi = x + _shorter(a_hi, r_hi[d]) + 1
+                lo = i - _shorter(a_lo, r_lo[d])
+                hi = i + _shorter(a_hi, r_hi[d]) + 1
                 total = sums[hi, d] - sums[lo, d]
                 if normalise:
                     total /= counts[hi, d] - counts[lo, d]
                 result[d] = total
-
-
-#: Columns :func:`sum_down_columns` runs along at once, their running sums side by side
-#: in memory (a column alone is read with a stride of a whole row). 4 was fastest of 1, 2,
-#: 4 and 8 (Adirondack, 73 disparities, 1 thread: 121 -> 110 ms with the division, 74 -> 64
-#: without; at 8 the two columns' sums outgrow the cache, 266 ms).
-COLUMN_BLOCK = 4
-
-
-@njit(**KERNEL_OPTIONS)
-def sum_down_columns(src, arms_l, arms_r_rev, normalise, out):
-    """:func:`sum_along_rows` along each pixel's vertical arm, :data:`COLUMN_BLOCK`
-    columns at a time (the same sums, in the same order, as a column at a time)."""
-    height, width, n_disp = src.shape
-    for block in prange((width + COLUMN_BLOCK - 1) // COLUMN_BLOCK):
-        x0 = block * COLUMN_BLOCK
-        n = min(width, x0 + COLUMN_BLOCK) - x0
-        sums = np.empty((height + 1, n, n_disp))
-        counts = np.empty((height + 1, n, n_disp) if normalise else (1, 1, 1))
-        sums[0] = 0.0
-        counts[0] = 0.0
-        for y in range(height):
-            for j in range(n):
-                x = x0 + j
-                here = src[y, x]
-                for d in range(n_disp):
-                    sums[y + 1, j, d] = sums[y, j, d] + here[d]
-                if normalise:
-                    f_lo, f_hi, g_lo, g_hi = _arms_across(arms_l, arms_r_rev, LEFT, RIGHT,
-                                                          y, x, 0)
-                    for d in range(n_disp):
-                        counts[y + 1, j, d] = (counts[y, j, d] + 1 + _shorter(f_lo, g_lo[d])
-                                               + _shorter(f_hi, g_hi[d]))
-        for y in range(height):
-            for j in range(n):
-                x = x0 + j
-                a_lo, a_hi, r_lo, r_hi = _arms_across(arms_l, arms_r_rev, UP, DOWN, y, x, 0)
-                result = out[y, x]
-                for d in range(n_disp):
-                    lo = y - _shorter(a_lo, r_lo[d])
-                    hi = y + _shorter(a_hi, r_hi[d]) + 1
-                    total = sums[hi, j, d] - sums[lo, j, d]
-                    if normalise:
-                        total /= counts[hi, j, d] - counts[lo, j, d]
-                    result[d] = total

@@ -1,56 +1,45 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS
-
-
-@njit(inline="always")
-def _mirror(p, n):
-    """Index ``p`` mirrored into ``0 .. n - 1`` about the edge pixels (OpenCV's
-    BORDER_REFLECT_101), again and again for a window wider than the image."""
-    if n == 1:
-        return 0
-    while p < 0 or p >= n:
-        p = -p if p < 0 else 2 * n - 2 - p
-    return p
+from . import KERNEL_OPTIONS, SERIAL_OPTIONS
 
 
 @njit(**KERNEL_OPTIONS)
-def box_mean(volume, box, out):
+def box_mean(volume, box, rows_at, columns_at, out):
     """The mean of each (H, W, D) volume slice over ``box`` x ``box`` windows, as
-    ``cv2.blur`` takes it (the window from ``box // 2`` before the pixel, borders mirrored
-    about the edge pixels), in float64 sums: per output row the window's rows are added
-    over the whole row, then the window slides along it."""
+    ``cv2.blur`` takes it, in float64 sums: per output row the window's rows are added over
+    the whole row, then the window slides along it. ``rows_at[y + k]`` and
+    ``columns_at[x + k]`` are the rows and columns the window's k-th line reads (the
+    borders mirrored)."""
     height, width, depth = volume.shape
-    before = box // 2
     scale = 1.0 / (box * box)
     for y in prange(height):
         rows = np.zeros((width, depth))
         for k in range(box):
-            src = volume[_mirror(y - before + k, height)]
+            src = volume[rows_at[y + k]]
             for x in range(width):
                 for d in range(depth):
                     rows[x, d] += src[x, d]
         window = np.zeros(depth)
         for k in range(box):
-            column = rows[_mirror(k - before, width)]
+            column = rows[columns_at[k]]
             for d in range(depth):
                 window[d] += column[d]
         for x in range(width):
             if x > 0:
-                enter = rows[_mirror(x - before + box - 1, width)]
-                leave = rows[_mirror(x - 1 - before, width)]
+                enter = rows[columns_at[x + box - 1]]
+                leave = rows[columns_at[x - 1]]
                 for d in range(depth):
                     window[d] += enter[d] - leave[d]
             for d in range(depth):
                 out[y, x, d] = window[d] * scale
 
 
-@njit(**KERNEL_OPTIONS)
+@njit(**SERIAL_OPTIONS)
 def matched_count(matched, disp, per_row):
     """Per row, the ``matched`` left pixels whose right pixel x - round(d) is in view."""
     height, width = matched.shape
-    for y in prange(height):
+    for y in range(height):
         n = 0
         for x in range(width):
             if matched[y, x] and x - np.int64(np.rint(disp[y, x])) >= 0:
@@ -58,12 +47,12 @@ def matched_count(matched, disp, per_row):
         per_row[y] = n
 
 
-@njit(**KERNEL_OPTIONS)
+@njit(**SERIAL_OPTIONS)
 def matched_colours(left, right, matched, disp, first, ys, xr, at_left, at_right):
     """The rows, right columns and colours (left and right) of the pixels
     :func:`matched_count` counts, in row-major order, row y's from ``first[y]`` on."""
     height, width, channels = left.shape
-    for y in prange(height):
+    for y in range(height):
         i = first[y]
         for x in range(width):
             if not matched[y, x]:
@@ -79,22 +68,22 @@ def matched_colours(left, right, matched, disp, first, ys, xr, at_left, at_right
             i += 1
 
 
-@njit(**KERNEL_OPTIONS)
+@njit(**SERIAL_OPTIONS)
 def corrected_colours(mapped, field, ys, xr, out):
     """out = clip(rint(mapped + field at (ys, xr)), 0, 255) as uint8, (N, channels)."""
     n, channels = mapped.shape
-    for i in prange(n):
+    for i in range(n):
         for c in range(channels):
             v = np.rint(np.float32(mapped[i, c]) + field[ys[i], xr[i], c])
             out[i, c] = np.uint8(min(np.float32(255.0), max(np.float32(0.0), v)))
 
 
-@njit(**KERNEL_OPTIONS)
+@njit(**SERIAL_OPTIONS)
 def map_colours(view, table, field, out):
     """out = clip(rint(table[view] + field), 0, 255) as uint8 for (H, W, C) ``view``,
     ``table`` (256, C) and float32 ``field`` (H, W, C)."""
     height, width, channels = view.shape
-    for y in prange(height):
+    for y in range(height):
         for x in range(width):
             for c in range(channels):
                 v = np.rint(np.float32(table[view[y, x, c], c]) + field[y, x, c])
