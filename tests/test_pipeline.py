@@ -110,3 +110,35 @@ def test_bands_aggregation_switches_the_finer_levels_aggregation_only(rng, monke
     result = pipeline.run(left, right, max_disp=24, config=cfg)
     assert result.levels == 1 and len(shapes) == calls
     assert shapes[0][:2] == (32, 80)  # the coarse level's full search always aggregates
+
+
+def _match_in_worker(seed):
+    pair = synthetic.make_pair(width=96, height=64, seed=seed)
+    return float(np.nanmean(vsmatch.match(pair.left, pair.right, max_disp=pair.max_disp,
+                                          config="fast")))
+
+
+def test_a_fork_pool_after_a_match_gets_an_error_not_a_hang():
+    """On GNU OpenMP (Numba's layer unless TBB is there), a child forked after a match dies
+    at its first kernel and a multiprocessing pool waits for ever. The match in such a
+    child is refused, naming the way out, so the pool's caller gets the error; on a layer
+    that survives fork() the child matches."""
+    import multiprocessing
+
+    import numba
+
+    pair = synthetic.make_pair(width=96, height=64)
+    vsmatch.match(pair.left, pair.right, max_disp=pair.max_disp, config="fast")
+    gnu_openmp = numba.threading_layer() == "omp"
+    if gnu_openmp:
+        from numba.np.ufunc import omppool
+        gnu_openmp = getattr(omppool, "openmp_vendor", "GNU") == "GNU"
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        outcome = pool.apply_async(_match_in_worker, (1,))
+        if gnu_openmp:
+            with pytest.raises(vsmatch.ForkedProcessError, match="get_context\\('spawn'\\)"):
+                outcome.get(timeout=120)
+        else:
+            assert np.isfinite(outcome.get(timeout=120))
+    # The process that matched first matches on.
+    assert np.isfinite(_match_in_worker(2))

@@ -16,6 +16,7 @@ __version__ = "0.5.0"
 #: Each public name and the module that defines it.
 _EXPORTS = {
     "Calibration": "geometry", "Config": "config", "ConfigError": "config",
+    "ForkedProcessError": "forking",
     "INVALID_DISPARITY": "disparity", "MatchResult": "result", "StereoMatcher": "matcher",
     "depth_from_disparity": "geometry", "estimate_disparity_range": "search_range",
     "load_config": "config", "match": "api", "point_cloud": "geometry",

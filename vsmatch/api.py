@@ -8,6 +8,7 @@ import numpy as np
 from . import pipeline
 from .checks import check_views
 from .config import Config, load_config
+from .forking import check_not_forked
 from .result import MatchResult
 from .search_range import resolve_range
 
@@ -47,6 +48,7 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int | None = None,
         min_disp: int | None = None, config: Config | str | None = None) -> MatchResult:
     """:func:`match` with per-stage timings, the left-right labels, the confidence and the
     range used."""
+    check_not_forked()  # before the range's search, which runs kernels too
     cfg = load_config(config)
     if max_disp is None:
         check_views(left, right, cfg)  # the views' own checks, before the features

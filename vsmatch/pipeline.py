@@ -15,6 +15,7 @@ from . import (confidence, edges, exposure, photometric, planes, pyramid, scale,
 from . import temporal as video
 from .checks import check_pair, check_views  # noqa: F401  (the inputs' checks, re-exported)
 from .config import Config, load_config
+from .forking import check_not_forked
 from .images import to_grey
 from .level import solve
 from .result import Learnt, MatchResult, learn, timed
@@ -33,6 +34,7 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0
     labels, the confidence and the range used (:func:`vsmatch.run` for the parameters).
     ``temporal``: the memory of a stream's earlier frames (``vsmatch.temporal``), used and
     updated; this frame then searches near the last one's disparities."""
+    check_not_forked()
     cfg = load_config(config)
     check_pair(left, right, max_disp, cfg, min_disp)
     if temporal is not None:
