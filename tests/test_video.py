@@ -74,13 +74,35 @@ def test_video_errors_are_one_line(tmp_path):
                     tmp_path / "d.avi")
     assert result.exit_code == 1 and "missing.avi: file not found" in result.output
     (tmp_path / "text.mp4").write_text("not a video\n")
-    result = invoke("video", tmp_path / "text.mp4", tmp_path / "text.mp4", "-o",
+    (tmp_path / "text2.mp4").write_text("not a video either\n")
+    result = invoke("video", tmp_path / "text.mp4", tmp_path / "text2.mp4", "-o",
                     tmp_path / "d.avi")
     assert result.exit_code == 1 and "cannot open this video" in result.output
     assert invoke("video", tmp_path / "a.avi", "-o", tmp_path / "d.avi").exit_code == 2
     result = invoke("video", tmp_path / "a.avi", tmp_path / "b.avi", "-o", tmp_path / "d.gif")
     assert result.exit_code == 2 and ".avi or .mp4" in result.output
     assert not (tmp_path / "d.avi").exists()
+
+
+def test_the_same_video_folder_or_camera_as_left_and_right_is_refused(tmp_path, rng):
+    """One camera given twice would match a view against itself: disparity 0 everywhere,
+    confident. Refused before anything is opened or written, links and '..' resolved."""
+    write_videos(tmp_path, rng, frames=2)
+    (tmp_path / "link.avi").symlink_to(tmp_path / "left.avi")
+    (tmp_path / "frames").mkdir()
+    cases = [(tmp_path / "left.avi", tmp_path / "link.avi", "same video"),
+             (tmp_path / "frames", f"{tmp_path}/frames/../frames", "same folder"),
+             ("0", "00", "same camera")]
+    for left, right, what in cases:
+        result = invoke("video", left, right, "-o", tmp_path / "d.avi", "--max-disp", 16)
+        assert result.exit_code == 1, result.output
+        assert f"LEFT and RIGHT are the {what}" in result.output
+        assert "--side-by-side" in result.output and "Traceback" not in result.output
+        assert not (tmp_path / "d.avi").exists()
+    # Two different sources still run.
+    result = invoke("video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
+                    tmp_path / "d.avi", "--max-disp", 16, "--config", "fast")
+    assert result.exit_code == 0, result.output
 
 
 def test_overwrite_never_deletes_what_vsmatch_did_not_write(tmp_path, rng, monkeypatch):

@@ -91,6 +91,11 @@ def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_p
         raise click.UsageError(f"--depth-png holds depths up to {PNG_DEPTH_LIMIT} (x 1000 in "
                                "16 bits): give --max-depth of at most that")
     names = [left] + ([] if right is None else [right])
+    if len(names) == 2 and _same_source(*names):
+        what = "camera" if left.isdigit() else ("folder" if Path(left).is_dir() else "video")
+        raise click.ClickException(f"LEFT and RIGHT are the same {what} ({left}, {right}): "
+                                   f"give each camera's {what}, or one side-by-side video "
+                                   "with --side-by-side")
     inputs = [n for n in names if not n.isdigit()] + list(calib)
     folders = {name: folder for name, folder in (("--frames", frames_dir),
                                                  ("--depth-frames", depth_dir),
@@ -229,3 +234,11 @@ def write_frame(written: dict[str, Path], stem: str, result, stereo: StereoMatch
                                                max_depth=max_depth)
         io.write_point_cloud(written["--cloud-frames"] / f"{stem}.ply",
                              geometry.ply_vertices(points, colours))
+
+
+def _same_source(left: str, right: str) -> bool:
+    """Whether two sources name one camera index, or one file or folder (links and ``..``
+    resolved)."""
+    if left.isdigit() or right.isdigit():
+        return left.isdigit() and right.isdigit() and int(left) == int(right)
+    return io.resolved(left) == io.resolved(right)
