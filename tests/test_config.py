@@ -215,3 +215,18 @@ def test_with_changes_sets_keys_from_section_key_value_text():
     assert cfg.surfaces.refit == load_config("accurate").surfaces.refit  # the rest kept
     with pytest.raises(ConfigError):
         with_changes("default", ["surfaces.bridge=-1"])  # checked as a config file is
+
+
+def test_a_mapping_is_taken_as_a_config_file_would_be(rng):
+    """config= may be a mapping laid out as a YAML config (a base included); its mistakes
+    are named as a file's are, and it is never taken for a file name."""
+    import vsmatch
+
+    cfg = load_config({"base": "fast", "arms": {"l1": 5}})
+    assert cfg.arms.l1 == 5 and cfg.pyramid.min_levels == load_config("fast").pyramid.min_levels
+    assert load_config({"arms": {"l1": 5}}).arms.l2 == Config().arms.l2  # the built-in values
+    with pytest.raises(ConfigError, match="the config mapping: unknown config key 'arms.l9'"):
+        load_config({"arms": {"l9": 5}})
+    left = rng.integers(0, 256, (40, 64, 3), dtype=np.uint8)
+    with pytest.raises(ConfigError, match="the config mapping: base must name"):
+        vsmatch.match(left, left, max_disp=8, config={"base": "nope"})

@@ -33,6 +33,10 @@ def test_huge_image_headers_are_refused_before_decoding(tmp_path, monkeypatch):
     (tmp_path / "big.png").write_bytes(png_header_only(8000, 6000))
     with pytest.raises(io.ImageError, match="--max-memory"):
         io.read_image(tmp_path / "big.png", max_mb=1024)
+    # A small limit names a small size as it is, not as "0 megapixels".
+    (tmp_path / "small.png").write_bytes(png_header_only(450, 375))
+    with pytest.raises(io.ImageError, match="is 0.17 megapixels, over the limit of 0.01"):
+        io.read_image(tmp_path / "small.png", max_megapixels=0.01)
 
 
 @pytest.mark.parametrize("ext", [".png", ".jpg", ".bmp", ".ppm", ".pgm", ".tif"])

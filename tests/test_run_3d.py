@@ -141,3 +141,20 @@ def test_a_16_bit_png_holds_every_real_pairs_disparities(data_dir, tmp_path, lef
     assert result.exit_code == 0, result.output
     disp = io.read_disparity(out)
     assert np.isfinite(disp).mean() > 0.9 and np.nanmin(disp[np.isfinite(disp)]) >= 0
+
+
+def test_an_empty_cloud_is_said_not_written_silently(pair):
+    """A threshold no pixel reaches writes a valid cloud of 0 points, and says so: a user
+    would otherwise find an empty file under a plain 'wrote'."""
+    (pair / "strict.yaml").write_text("cloud:\n  min_confidence: 1.0\n")
+    result = invoke("run", pair / "l.png", pair / "r.png", "--calib", pair / "calib.txt",
+                    "-o", pair / "d.pfm", "--cloud", pair / "c.ply", "--config",
+                    pair / "strict.yaml")
+    assert result.exit_code == 0, result.output
+    assert f"warning: {pair / 'c.ply'} holds no points" in result.output
+    assert "cloud.min_confidence" in result.output
+    assert len(PlyData.read(str(pair / "c.ply"))["vertex"]) == 0
+    # A cloud with points says nothing of the kind.
+    result = invoke("run", pair / "l.png", pair / "r.png", "--calib", pair / "calib.txt",
+                    "-o", pair / "d2.pfm", "--cloud", pair / "c2.ply", "--min-confidence", 0)
+    assert result.exit_code == 0 and "holds no points" not in result.output

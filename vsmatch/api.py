@@ -32,7 +32,7 @@ def match(left: np.ndarray, right: np.ndarray, *, max_disp: int | None = None,
         ``minDisparity``, left pixels with no candidate in the range are invalid: the
         first ``min_disp`` columns when it is positive; when negative, the pixels whose
         match lies beyond the right view's last column.
-    config : Config, bundled config name or YAML path, optional
+    config : Config, bundled config name, YAML path or a mapping laid out as one, optional
         The method's parameters; ``None`` uses the bundled ``default``.
 
     Returns

@@ -8,6 +8,7 @@ with a one-line :class:`ConfigError` that names the key.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 import functools
 import math
 from dataclasses import dataclass, field
@@ -701,13 +702,16 @@ def bundled_config_names() -> list[str]:
 DEFAULT_CONFIG_NAME = "default"
 
 
-def load_config(name_or_path: str | Path | Config | None = None) -> Config:
-    """Load a bundled config by name (``paper``), or a YAML file by path.
+def load_config(name_or_path: str | Path | Config | Mapping | None = None) -> Config:
+    """Load a bundled config by name (``paper``), or a YAML file by path, or take a mapping
+    laid out as a config file is (``{"base": "fast", "arms": {"l1": 20}}``).
 
     ``None`` gives the bundled ``default`` config.
     """
     if isinstance(name_or_path, Config):
         return name_or_path
+    if isinstance(name_or_path, Mapping):
+        return _config_from_data(dict(name_or_path), "the config mapping")
     if name_or_path is None:
         name_or_path = DEFAULT_CONFIG_NAME
     if str(name_or_path) in bundled_config_names():
@@ -751,6 +755,12 @@ def _parse_config(name_or_path: str) -> Config:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
         raise ConfigError(f"config {origin} is not valid YAML{where}") from None
+    return _config_from_data(data, origin)
+
+
+def _config_from_data(data: Any, origin: str) -> Config:
+    """A config's parsed YAML (or a mapping given in Python) over the built-in values, or
+    over the bundled config its ``base`` names; errors name ``origin``."""
     base = None
     if isinstance(data, dict) and "base" in data:
         # `base: default` merges the file over a bundled config instead of the built-in values.

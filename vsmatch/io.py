@@ -54,8 +54,9 @@ def check_image_size(path: str | Path, width: int, height: int, *,
     arrays alone would not fit ``max_mb`` megabytes."""
     megapixels = width * height / 1e6
     if megapixels > max_megapixels:
-        raise ImageError(f"{path}: {width}x{height} is {megapixels:.0f} megapixels, over the "
-                         f"limit of {max_megapixels:g} (config memory.max_megapixels)")
+        shown = f"{megapixels:.0f}" if megapixels >= 100 else f"{megapixels:.2f}"
+        raise ImageError(f"{path}: {width}x{height} is {shown} megapixels, over the limit of "
+                         f"{max_megapixels:g} (config memory.max_megapixels)")
     needed = width * height * IMAGE_BYTES_PER_PIXEL / 2**20
     if max_mb is not None and needed > max_mb:
         raise ImageError(f"{path}: {width}x{height} needs about {needed:.0f} MB for its "

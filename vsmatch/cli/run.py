@@ -185,6 +185,11 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
             io.write_point_cloud(cloud_path, geometry.ply_vertices(points, colours))
             verbose(ctx, f"{len(points)} points in the cloud (confidence >= {kept_at:g}"
                           f"; {int(np.isfinite(result.disparity).sum()) - len(points)} left out)")
+            if len(points) == 0:
+                depth_note = "" if max_depth is None else f" and --max-depth {max_depth:g}"
+                echo(ctx, f"warning: {cloud_path} holds no points: no pixel reached the "
+                          f"confidence of {kept_at:g} (cloud.min_confidence, --min-confidence)"
+                          f"{depth_note}", err=True)
         if preview_path is not None:
             io.imwrite_atomic(preview_path, preview.disparity_preview(
                 disp, result.confidence, kept_at))
