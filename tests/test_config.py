@@ -148,11 +148,16 @@ def test_a_huge_whole_number_is_out_of_range(tmp_path):
 def test_a_budget_too_small_for_the_overlap_names_the_overlap(rng):
     from vsmatch import pipeline
 
-    cfg = config_from_dict({"memory": {"overlap": 4096, "max_mb": 64}},
+    cfg = config_from_dict({"memory": {"overlap": 4096, "max_mb": 16}},
                            base=load_config("default"))
+    tall = rng.integers(0, 256, (2000, 96, 3), dtype=np.uint8)
+    # 2000 rows of 96 pixels x 17 disparities: 37 MB in one piece, less than two overlaps.
+    with pytest.raises(ValueError, match="memory.overlap = 4096 .* at least 37 MB"):
+        pipeline.check_pair(tall, tall.copy(), 16, cfg)
+    # Views whose rows all fit the budget need no stripes, whatever the overlap.
     left = rng.integers(0, 256, (64, 96, 3), dtype=np.uint8)
-    with pytest.raises(ValueError, match="memory.overlap = 4096"):
-        pipeline.check_pair(left, left.copy(), 16, cfg)
+    pipeline.check_pair(left, left.copy(), 16, cfg)
+    assert np.isfinite(pipeline.run(left, left.copy(), max_disp=16, config=cfg).disparity).all()
 
 
 def test_scheduling_sits_under_schedule_and_the_old_layout_is_still_read(tmp_path):

@@ -51,4 +51,4 @@ def check_pair(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
         raise ValueError(f"the range {min_disp}..{max_disp} is too wide for images "
                          f"{width} pixels wide")
     stripe_rows(*full_search_size(cropped, max_disp - min_disp, cfg, left.shape[0]),
-                cfg)  # budget enough?
+                cfg, left.shape[0])  # budget enough? (the full size's height: at most)

@@ -130,12 +130,18 @@ def coarse_to_fine(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp:
 PIXEL_BYTES = 64
 
 
-def stripe_rows(width: int, n_disp: int, cfg: Config) -> int:
-    """The most rows the full search may take at once within ``memory.max_mb``."""
+def stripe_rows(width: int, n_disp: int, cfg: Config, height: int | None = None) -> int:
+    """The most rows the full search may take at once within ``memory.max_mb``; with the
+    ``height`` of the views, a budget for all their rows needs no stripes (and no
+    overlap)."""
     row_bytes = width * (8 * n_disp + PIXEL_BYTES)
     rows = cfg.memory.max_mb * 2**20 // row_bytes
-    if rows < 2 * cfg.memory.overlap + 16:
-        need = math.ceil((2 * cfg.memory.overlap + 16) * row_bytes / 2**20)
+    least = 2 * cfg.memory.overlap + 16
+    if height is not None and rows >= height:
+        return int(rows)
+    if rows < least:
+        # What one piece of the views needs, where that is less than a stripe's rows.
+        need = math.ceil(min(least, height or least) * row_bytes / 2**20)
         raise ValueError(f"a memory budget of {cfg.memory.max_mb} MB is too small for "
                          f"stripes of 16 rows and twice memory.overlap = {cfg.memory.overlap} "
                          f"rows of {width} pixels x {n_disp} disparities; allow at least "
@@ -153,7 +159,7 @@ def in_stripes(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp: int
     """
     height, width = left.shape[:2]
     depth = max_disp + 1 if bands is None else bands.width
-    layout = stripe_layout(height, stripe_rows(width, depth, cfg), cfg.memory.overlap)
+    layout = stripe_layout(height, stripe_rows(width, depth, cfg, height), cfg.memory.overlap)
     if len(layout) == 1:
         return solve(left, right, max_disp, cfg, bands)
     disp = np.empty((height, width), dtype=np.float32)
