@@ -272,3 +272,20 @@ def test_a_folder_beside_a_missing_one_names_the_missing_one(tmp_path, rng):
     result = invoke("video", left, tmp_path / "nosuch", "-o", tmp_path / "d.avi")
     assert result.exit_code == 1 and "nosuch: file not found" in result.output, result.output
     assert not (tmp_path / "d.avi").exists()
+
+
+def test_a_frame_of_another_size_mid_stream_is_named_with_both_sizes(tmp_path, rng):
+    """The video holds one size: a frame of another size stops the command naming the
+    frame and both sizes, before anything lands (it read "could not be written ... is the
+    disk full?")."""
+    left, right = write_folders(tmp_path, rng, ["000001.png", "000002.png"])
+    small = cv2.resize(cv2.imread(str(left / "000002.png")), (64, 32))
+    cv2.imwrite(str(left / "000003.png"), small)
+    cv2.imwrite(str(right / "000003.png"), small)
+    result = invoke("video", left, right, "-o", tmp_path / "v.avi", "--max-disp", 12,
+                    "--frames", tmp_path / "fr", "--config", "fast")
+    assert result.exit_code == 1, result.output
+    line = result.output.strip().splitlines()[-1]
+    assert "000003.png is 64x32, the frames before it 96x48" in line
+    assert "disk full" not in result.output
+    assert not (tmp_path / "v.avi").exists() and not (tmp_path / "fr").exists()

@@ -211,12 +211,21 @@ def test_frames_folder_is_refused_when_full_and_replaced_whole(tmp_path, rng):
 
 
 def test_frames_folder_may_not_hold_the_inputs(tmp_path, rng):
-    left, right = write_videos(tmp_path, rng)
-    line = one_line_error(invoke("video", left, right, "-o", tmp_path / "out" / "d.avi",
-                                 "--frames", tmp_path, "--overwrite", "--max-disp", 16),
+    """--frames replaces its folder as a whole: one holding an input (or the video) is
+    refused by that check's own message, the output's folder existing."""
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    left, right = write_videos(inputs, rng)
+    line = one_line_error(invoke("video", left, right, "-o", tmp_path / "d.avi",
+                                 "--frames", inputs, "--overwrite", "--max-disp", 16),
                           code=1)
-    assert "--frames folder" in line or "does not exist" in line
-    assert left.exists() and right.exists()
+    assert f"--frames {inputs} holds the input {left}" in line
+    assert "a folder of its own" in line
+    assert left.exists() and right.exists() and not (tmp_path / "d.avi").exists()
+    (tmp_path / "fr").mkdir()
+    line = one_line_error(invoke("video", left, right, "-o", tmp_path / "fr" / "d.avi",
+                                 "--frames", tmp_path / "fr", "--max-disp", 16), code=1)
+    assert f"--frames {tmp_path / 'fr'} holds the output" in line
 
 
 def test_unpaired_video_frames_fail_with_both_counts(tmp_path, rng):

@@ -162,6 +162,7 @@ class FolderPairs:
 
     def __iter__(self):
         for left, right in self.paths:
+            self.current = left  # the left frame of the pair last given, for messages
             try:
                 yield io.read_pair(left, right)
             except io.ImageError as exc:  # a frame cut short by a camera that stopped

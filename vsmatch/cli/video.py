@@ -13,7 +13,7 @@ import numpy as np
 from .. import confidence, frames, geometry, io, preview
 from ..matcher import StereoMatcher
 from ..search_range import PairGeometryError, RangeError
-from .common import (MAX_DISP, check_outputs, check_outside, config_option, echo, examples,
+from .common import (MAX_DISP, check_outputs, config_option, echo, examples,
                      friendly_errors, verbose, verbosity_options)
 
 from .main import main
@@ -105,7 +105,13 @@ def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_p
         raise click.UsageError(f"{', '.join(folders)} must name different folders")
     for name, folder in folders.items():  # each replaced as a whole: nothing else in it
         others = [f for f in folders.values() if f != folder]
-        check_outside(Path(folder), [*inputs, output, *others], f"{name} folder")
+        root = io.resolved(folder)
+        for path in [*inputs, output, *others]:
+            if io.resolved(path).is_relative_to(root):
+                role = "the input" if path in inputs else "the output"
+                raise click.ClickException(
+                    f"{name} {folder} holds {role} {path}: the folder is replaced as a "
+                    f"whole; give {name} a folder of its own")
         try:
             io.check_replaceable_folder(folder, overwrite=overwrite, ours=frames.is_frame_file)
         except OSError as exc:
@@ -146,7 +152,16 @@ def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_p
         # A bar in a terminal only (None): a log file gets no carriage returns.
         with tqdm(total=total, disable=True if quiet else None, unit="frame",
                   leave=False) as bar:
+            size = None
             for frame_l, frame_r in pairs:
+                size = size or frame_l.shape[1::-1]
+                if frame_l.shape[1::-1] != size:  # a video holds one size of frame
+                    name = getattr(pairs, "current", None) or f"frame {count + 1} of {left}"
+                    width, height = frame_l.shape[1::-1]
+                    raise click.ClickException(
+                        f"{name} is {width}x{height}, the frames before it {size[0]}x"
+                        f"{size[1]}: one video holds frames of one size; give the frames of "
+                        "each size as a video of their own")
                 try:
                     result = stereo.result(frame_l, frame_r)
                 except RangeError as exc:
