@@ -96,3 +96,25 @@ def test_a_swapped_raw_pair_is_not_told_to_rectify(data_dir, tmp_path):
     line = one_line_error(invoke("run", rig_dir / "right.png", rig_dir / "left.png",
                                  "--calib", rig_dir / "rig.yml", "-o", tmp_path / "d.pfm"))
     assert "are the views swapped" in line and "rectify it first" not in line
+
+
+def test_a_range_too_small_is_said_with_how_many_pixels_pile_at_its_end(tmp_path, data_dir):
+    """cones (disparities up to ~55) searched to 30 exits 0 with a disparity map, and says
+    how many pixels lie at the range's top; searched over its own range, nothing is said."""
+    folder = data_dir / "middlebury2" / "cones"
+    result = invoke("run", folder / "imL.png", folder / "imR.png", "-o", tmp_path / "d.pfm",
+                    "--max-disp", 30, "--config", "fast")
+    assert result.exit_code == 0, result.output
+    warning = [line for line in result.output.splitlines() if "warning:" in line]
+    assert len(warning) == 1, result.output
+    assert "of the pixels lie at the top of the range searched (30)" in warning[0]
+    assert "larger --max-disp" in warning[0]
+    result = invoke("run", folder / "imL.png", folder / "imR.png", "-o", tmp_path / "e.pfm",
+                    "--max-disp", 59, "--config", "fast")
+    assert result.exit_code == 0 and "warning" not in result.output, result.output
+    # Above a bottom of 0 the bottom end counts too (a scene farther than the range).
+    from vsmatch.search_range import range_end_warning
+
+    disparity = np.full((10, 10), 20.0, np.float32)
+    assert "at the bottom of the range searched (20)" in range_end_warning(disparity, 20, 60)
+    assert range_end_warning(np.zeros((10, 10), np.float32), 0, 60) is None

@@ -199,6 +199,9 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
     for path in outputs:
         if path is not None:
             echo(ctx, f"wrote {path}")
+    piled = search_range.range_end_warning(result.disparity, min_disp, max_disp)
+    if piled is not None:
+        echo(ctx, f"warning: {left}: {piled}", err=True)
 
 
 def rectified_outputs(folder) -> dict[Path, list[Path]]:
