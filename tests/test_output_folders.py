@@ -117,3 +117,45 @@ def test_loading_the_command_does_not_load_numba_or_opencv():
             "print('numba' in sys.modules or 'cv2' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.stdout.strip() == "False", out.stderr
+
+
+def test_eval_gives_each_method_its_own_folder_and_replaces_nothing(tmp_path, data_dir):
+    """Two methods of one file name shared one folder, the second replacing the first; a
+    folder holding a user's files was written over; a method named after a data set wrote
+    into it. Each method now gets a folder of its own, said where names meet; a folder with
+    files is refused without --overwrite; a data set's folder never."""
+    import shutil
+
+    root = tmp_path / "data"
+    shutil.copytree(data_dir / "middlebury2", root / "middlebury2")
+    for folder, base in (("a", "fast"), ("b", "paper")):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "fast.yaml").write_text(f"base: {base}\n")
+    out = tmp_path / "out"
+    result = invoke("eval", "--data-root", root, "--method", tmp_path / "a" / "fast.yaml",
+                    "--method", tmp_path / "b" / "fast.yaml", "--method", "fast",
+                    "--out-dir", out)
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in out.iterdir()) == ["fast", "fast_2", "fast_3"]
+    assert "fast.yaml: its outputs in" in result.output and "fast_2" in result.output
+    bases = [(out / f / "config.yaml").read_text() for f in ("fast", "fast_2", "fast_3")]
+    # Each folder holds its own method's config: b's (paper) was written over a's before.
+    assert bases[1] != bases[0] and bases[0] == bases[2]
+    # A folder that holds files: refused before any work, nothing touched.
+    before = (out / "fast" / "tsukuba.pfm").read_bytes()
+    result = invoke("eval", "--data-root", root, "--method", "paper", "--method", "fast",
+                    "--out-dir", out)
+    assert result.exit_code == 1 and "already holds files" in result.output
+    assert "--overwrite" in result.output and not (out / "paper").exists()
+    assert (out / "fast" / "tsukuba.pfm").read_bytes() == before
+    assert invoke("eval", "--data-root", root, "--method", "fast", "--out-dir", out,
+                  "--overwrite").exit_code == 0
+    # A method named after a data set, its folder in the data root: refused.
+    (tmp_path / "middlebury2.yaml").write_text("base: fast\n")
+    result = invoke("eval", "--data-root", root, "--dataset", "middlebury2", "--method",
+                    tmp_path / "middlebury2.yaml", "--out-dir", root)
+    assert result.exit_code == 1, result.output
+    assert "lies in the data set middlebury2" in result.output
+    assert not (root / "middlebury2" / "tsukuba.pfm").exists()
+    assert sorted(p.name for p in (root / "middlebury2").iterdir()) == sorted(
+        p.name for p in (data_dir / "middlebury2").iterdir())

@@ -160,9 +160,10 @@ def evaluate(scenes: list[Scene], methods: dict, *, dataset: str,
     ranges = ranges or scene_ranges(scenes)
     report: dict[str, Any] = {"dataset": dataset, "metric": scoring.metric,
                               "threshold": scoring.threshold, "methods": {}}
+    names = method_folders(list(methods))
     for name, method in methods.items():
         run_method, cfg = full_runner(method)
-        folder = None if out_dir is None else Path(out_dir) / _safe_name(name)
+        folder = None if out_dir is None else Path(out_dir) / names[name]
         per_scene = {}
         for scene in scenes:
             low, high = ranges[scene.name]
@@ -203,11 +204,28 @@ def confidence_measures(disp: np.ndarray, conf: np.ndarray, scene: Scene,
     return sparsification(conf, correct, evaluated)
 
 
-def _safe_name(name: str) -> str:
+def safe_name(name: str) -> str:
     """A folder name for a method: a YAML path's stem, other characters made safe."""
     if name.endswith((".yaml", ".yml")):
         name = Path(name).stem
     return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "method"
+
+
+def method_folders(names: list[str]) -> dict[str, str]:
+    """Each method's folder under ``--out-dir``: its safe name (:func:`safe_name`), and
+    where two methods would share one (``a/fast.yaml`` and ``b/fast.yaml``, ``fast`` and
+    ``fast.yaml``) the later ones numbered (``fast_2``), in the order given."""
+    folders: dict[str, str] = {}
+    taken: set[str] = set()
+    for name in names:
+        base = folder = safe_name(name)
+        number = 1
+        while folder.lower() in taken:  # one folder on a case-blind file system too
+            number += 1
+            folder = f"{base}_{number}"
+        taken.add(folder.lower())
+        folders[name] = folder
+    return folders
 
 
 def save_scene_outputs(folder: Path, scene: Scene, disp: np.ndarray,

@@ -30,7 +30,10 @@ from .main import main
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help="Write the figures as JSON here.")
 @click.option("--out-dir", type=click.Path(file_okay=False), default=None,
-              help="Save each disparity (PFM, colour PNG) and an error image here.")
+              help="Save each disparity (PFM, colour PNG) and an error image here, a "
+                   "folder a method (named after it; numbered where two names meet).")
+@click.option("--overwrite", is_flag=True,
+              help="Write into method folders of --out-dir that already hold files.")
 @click.option("--figure", "figure_path", type=click.Path(dir_okay=False), default=None,
               help="Write a picture of the results here (.png): a row per scene; the "
                    "left view, the ground truth, and each method's disparity and errors.")
@@ -54,7 +57,7 @@ from .main import main
 @verbosity_options
 @click.pass_context
 @friendly_errors
-def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, figure_path,
+def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, overwrite, figure_path,
                  threshold, range_mode, ablation, noise, seeds):
     """Score methods on a benchmark with ground truth.
 
@@ -83,6 +86,8 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, figure_pa
     # Nothing is written into the data set that is read.
     check_outside(datasets.dataset_folder(dataset, data_root),
                   [json_path, figure_path, out_dir], "data set")
+    if out_dir is not None:
+        _check_method_folders(ctx, Path(out_dir), list(configs), data_root, overwrite)
     scenes = datasets.load_dataset(dataset, data_root)
     ranges = evaluation.scene_ranges(scenes, auto=range_mode == "auto")
     if range_mode == "auto":
@@ -123,6 +128,33 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, figure_pa
 
         io.imwrite_atomic(figure_path, results_figure(scenes, report, disparities))
         echo(ctx, f"wrote {figure_path}")
+
+
+def _check_method_folders(ctx, out_dir: Path, methods: list[str], data_root,
+                          overwrite: bool) -> None:
+    """Before any work: no method's folder inside a data set of the data root (a method
+    named after one would write into it), and none that holds files unless
+    ``overwrite``; each method's folder said where names met."""
+    folders = evaluation.method_folders(methods)
+    for name in datasets.DATASETS:
+        try:
+            data = io.resolved(datasets.dataset_folder(name, data_root))
+        except datasets.DatasetError:
+            continue
+        for method, folder in folders.items():
+            if io.resolved(out_dir / folder).is_relative_to(data):
+                raise click.ClickException(f"--out-dir {out_dir}: method {method}'s folder "
+                                           f"{out_dir / folder} lies in the data set {name} "
+                                           "(read, never written); give another --out-dir")
+    for method, folder in folders.items():
+        path = out_dir / folder
+        if path.is_dir() and any(path.iterdir()) and not overwrite:
+            raise click.ClickException(f"--out-dir {out_dir}: {path} (method {method}) "
+                                       "already holds files; --overwrite writes over them, "
+                                       "or give another --out-dir")
+        if folder != evaluation.safe_name(method):
+            echo(ctx, f"method {method}: its outputs in {path} (another method's name "
+                      "takes the plain folder)")
 
 
 def _parse_levels(text: str | None) -> list[float]:
