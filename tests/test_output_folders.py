@@ -159,3 +159,25 @@ def test_eval_gives_each_method_its_own_folder_and_replaces_nothing(tmp_path, da
     assert not (root / "middlebury2" / "tsukuba.pfm").exists()
     assert sorted(p.name for p in (root / "middlebury2").iterdir()) == sorted(
         p.name for p in (data_dir / "middlebury2").iterdir())
+
+
+@pytest.mark.parametrize("command", [["demo", "-o"], ["eval", "--method", "fast", "--out-dir"],
+                                     ["batch", "PAIRS", "-o"]])
+def test_a_link_to_nothing_as_an_output_folder_is_one_line(tmp_path, data_dir, command):
+    """A dangling link as an output folder read '[Errno 17] File exists'; now it is named,
+    with where it leads, before any work."""
+    (tmp_path / "out").symlink_to(tmp_path / "nowhere")
+    if "PAIRS" in command:
+        import shutil
+
+        cones = data_dir / "middlebury2" / "cones"
+        (tmp_path / "src").mkdir()
+        for name, side in (("imL.png", "left"), ("imR.png", "right")):
+            shutil.copy(cones / name, tmp_path / "src" / f"cones_{side}.png")
+        command = [c if c != "PAIRS" else tmp_path / "src" for c in command]
+    result = invoke(*command, tmp_path / "out", "--data-root", data_dir) if \
+        command[0] == "eval" else invoke(*command, tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    line = result.output.strip().splitlines()[-1]
+    assert f"a link to {tmp_path / 'nowhere'}, which does not exist" in line
+    assert "Errno" not in result.output and not (tmp_path / "nowhere").exists()

@@ -191,3 +191,25 @@ def test_two_folders_of_frames_paired_by_name(tmp_path, rng):
     result = invoke("video", tmp_path / "left", tmp_path / "right", "-o",
                     tmp_path / "e.avi", "--max-disp", 16)
     assert result.exit_code == 1 and "1 frame without a partner" in result.output
+
+
+def test_frames_through_a_link_follow_it_and_a_link_to_nothing_is_refused(tmp_path, rng):
+    """--frames naming a link to a folder writes into that folder, the link kept (the link
+    was replaced by a folder, its target left empty); a link to nothing is refused before
+    anything is written (the video landed, then the frames failed: not both or neither)."""
+    write_videos(tmp_path, rng, frames=2)
+    args = ["--max-disp", 16, "--config", "fast"]
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
+    result = invoke("video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
+                    tmp_path / "d.avi", "--frames", tmp_path / "dangling", *args)
+    assert result.exit_code == 1, result.output
+    assert f"a link to {tmp_path / 'nowhere'}, which does not exist" in result.output
+    assert "Errno" not in result.output and not (tmp_path / "d.avi").exists()
+    (tmp_path / "target").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "target")
+    result = invoke("video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
+                    tmp_path / "d.avi", "--frames", tmp_path / "link", *args)
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "link").is_symlink()
+    assert sorted(p.name for p in (tmp_path / "target").iterdir()) == [
+        f"{k:06d}{s}.pfm" for k in range(2) for s in ("", "_confidence")]

@@ -112,6 +112,10 @@ def check_output_files(jobs: list[PairJob]) -> list[Path]:
         if output.is_dir():
             raise BatchError(f"{job.describe()}: the output {output} is a folder")
         folder = output.parent
+        try:
+            io.followed_folder(folder)
+        except OSError as exc:
+            raise BatchError(f"{job.describe()}: the output folder {exc}") from None
         existing = folder
         while not existing.exists() and existing != existing.parent:
             existing = existing.parent

@@ -246,13 +246,26 @@ def _land(tmp: str | Path, path: Path) -> None:
         staged.append((str(tmp), path))
 
 
+def followed_folder(path: str | Path) -> Path:
+    """An output folder's path, a symbolic link to a folder followed (what it holds is
+    replaced, the link kept); a link to nothing is an OSError naming both."""
+    path = Path(path)
+    if not path.is_symlink():
+        return path
+    target = resolved(path)
+    if not target.exists():
+        raise OSError(f"{path}: a link to {target}, which does not exist (make that folder, "
+                      "or name another)")
+    return target
+
+
 def check_replaceable_folder(path: str | Path, *, overwrite: bool,
                              ours: Callable[[Path], bool]) -> None:
     """Refuse to replace the folder ``path`` as a whole when it is a file, the current
     folder or one above it, or holds anything: with ``overwrite``, anything that
     ``ours`` does not recognise as an earlier run's output (a user's own file or
-    sub-folder is never deleted)."""
-    path = Path(path)
+    sub-folder is never deleted). A link is followed (:func:`followed_folder`)."""
+    path = followed_folder(path)
     if path.exists() and not path.is_dir():
         raise OSError(f"{path}: is a file, not a folder")
     if not path.is_dir():
@@ -277,8 +290,9 @@ def staged_folder(path: str | Path, *, overwrite: bool = False,
     """A new folder that replaces ``path`` as a whole when the block (and the enclosing
     :func:`all_or_none` block) ends without an error, or is removed otherwise. An
     existing ``path`` that holds anything is refused unless ``overwrite`` and each of
-    its entries is an earlier output (``ours``; see :func:`check_replaceable_folder`)."""
-    path = Path(path)
+    its entries is an earlier output (``ours``; see :func:`check_replaceable_folder`).
+    A link to a folder is followed: the folder it leads to is replaced, the link kept."""
+    path = followed_folder(path)
     parent = path.parent if str(path.parent) else Path(".")
     check_replaceable_folder(path, overwrite=overwrite, ours=ours)
     parent.mkdir(parents=True, exist_ok=True)
@@ -306,7 +320,7 @@ def output_folder(path: str | Path | None):
     if path is None:
         yield None
         return
-    path = Path(path)
+    path = followed_folder(path)
     made = []
     for folder in [path, *path.parents]:
         if folder.exists():

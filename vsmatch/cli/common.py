@@ -351,8 +351,12 @@ def check_outputs(inputs, outputs, *, folders=()) -> None:
 
 
 def check_new_folder(folder: Path) -> None:
-    """An output folder that exists or can be made: not a file, and the nearest existing
-    folder above it writable."""
+    """An output folder that exists or can be made: not a file nor a link to nothing, and
+    the nearest existing folder above it writable."""
+    try:
+        folder = io.followed_folder(folder)
+    except OSError as exc:
+        raise click.ClickException(str(exc)) from None
     if folder.exists() and not folder.is_dir():
         raise click.ClickException(f"{folder}: is a file, not a folder")
     existing = folder
