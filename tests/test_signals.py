@@ -27,8 +27,9 @@ main(sys.argv[1:])
 """
 
 
-@pytest.mark.parametrize("name, code, line", [("SIGTERM", 143, "vsmatch: terminated"),
-                                              ("SIGINT", 130, "vsmatch: interrupted")])
+@pytest.mark.parametrize("name, code, line", [
+    ("SIGTERM", 143, "vsmatch: terminated"), ("SIGINT", 130, "vsmatch: interrupted"),
+    ("SIGHUP", 129, "vsmatch: hung up (the terminal closed)"), ("SIGQUIT", 131, "vsmatch: quit")])
 def test_a_signal_lost_in_a_callback_still_stops_the_run(tmp_path, rng, name, code, line):
     import os
 
@@ -45,3 +46,53 @@ def test_a_signal_lost_in_a_callback_still_stops_the_run(tmp_path, rng, name, co
     assert proc.returncode == code, proc.stderr
     assert lines[1:] == [line], proc.stderr  # no "Exception ignored", no traceback
     assert not (tmp_path / "d.pfm").exists()
+
+
+def write_two_videos(folder, rng, frames=3):
+    left, right = random_pair(rng, height=48, width=80, shift=4)
+    paths = []
+    for name, view in (("l", left), ("r", right)):
+        writer = cv2.VideoWriter(str(folder / f"{name}.avi"), cv2.VideoWriter_fourcc(*"MJPG"),
+                                 10, (80, 48))
+        for _ in range(frames):
+            writer.write(view)
+        writer.release()
+        paths.append(folder / f"{name}.avi")
+    return paths
+
+
+@pytest.mark.parametrize("name, code", [("SIGHUP", 129), ("SIGQUIT", 131)])
+def test_a_closed_terminal_stops_a_video_leaving_no_temporaries(tmp_path, rng, name, code):
+    """SIGHUP (a closed terminal or SSH session) and SIGQUIT mid-video left the staged
+    frames folder and the video's temporary; they are handled as SIGTERM is."""
+    import os
+
+    left, right = write_two_videos(tmp_path, rng)
+    proc = subprocess.run([sys.executable, "-c", STOP_IN_A_CALLBACK, "video", str(left),
+                           str(right), "-o", str(tmp_path / "d.avi"), "--frames",
+                           str(tmp_path / "fr"), "--max-disp", "8"],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "STOP_SIGNAL": name})
+    assert proc.returncode == code, proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["l.avi", "r.avi"], proc.stderr
+
+
+def test_what_a_killed_video_left_is_removed_by_the_next_run(tmp_path, rng):
+    """After a SIGKILL nothing can clean up: the next run of the same outputs removes the
+    temporaries of the earlier one (the video's and the staged frames folder), and nothing
+    else."""
+    from click.testing import CliRunner
+
+    from vsmatch.cli import main
+
+    left, right = write_two_videos(tmp_path, rng)
+    (tmp_path / ".d.k3j4h2g1.tmp.avi").write_bytes(b"half a video")
+    (tmp_path / ".fr.a8b7c6d5.tmp").mkdir()
+    (tmp_path / ".fr.a8b7c6d5.tmp" / "000000.pfm").write_bytes(b"half a frame")
+    (tmp_path / ".d.mine.tmp.avi").write_bytes(b"a user's file of another pattern")
+    result = CliRunner().invoke(main, ["video", str(left), str(right), "-o",
+                                       str(tmp_path / "d.avi"), "--frames",
+                                       str(tmp_path / "fr"), "--max-disp", "8"])
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        ".d.mine.tmp.avi", "d.avi", "fr", "l.avi", "r.avi"]

@@ -10,6 +10,7 @@ import contextlib
 import contextvars
 import glob
 import os
+import re
 import shutil
 import signal
 import sys
@@ -357,7 +358,8 @@ def _replace(tmp: str | Path, path: Path) -> None:
 
 
 #: Signals whose delivery is put off while the outputs of a block are renamed into place.
-_DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_DEFERRED_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP",
+                                                              "SIGQUIT") if hasattr(signal, name))
 
 
 @contextlib.contextmanager
@@ -431,9 +433,9 @@ def _temporary_suffix(path: Path) -> str:
 
 
 def remove_stale_temporaries(path: str | Path) -> None:
-    """Remove the temporary files that writes of ``path`` left behind when their process
-    was killed (a normal failure removes its own). Only for when no write of ``path`` is
-    under way."""
+    """Remove the temporary files (or staged folders, :func:`staged_folder`) that writes
+    of ``path`` left behind when their process was killed (a normal failure removes its
+    own). Only for when no write of ``path`` is under way."""
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
     prefix, suffix = _temporary_prefix(path), _temporary_suffix(path)
@@ -441,8 +443,11 @@ def remove_stale_temporaries(path: str | Path) -> None:
         return
     for candidate in folder.glob(f"{glob.escape(prefix)}*{glob.escape(suffix)}"):
         middle = candidate.name[len(prefix):-len(suffix)]
-        if "." not in middle:  # mkstemp's random part only, not another file's name
-            candidate.unlink(missing_ok=True)
+        if re.fullmatch(r"[a-z0-9_]{8}", middle):  # tempfile's random part, nothing else
+            if candidate.is_dir() and not candidate.is_symlink():  # a staged folder's
+                shutil.rmtree(candidate, ignore_errors=True)
+            else:
+                candidate.unlink(missing_ok=True)
 
 
 def current_umask() -> int:

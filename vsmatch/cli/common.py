@@ -19,7 +19,8 @@ from ..executors import ExecutorError
 EXPECTED_ERRORS = (ConfigError, io.ImageError, datasets.DatasetError, batch.BatchError,
                    ExecutorError, ValueError, OSError)
 
-#: Exit status after Ctrl-C (128 + SIGINT) and SIGTERM (128 + 15), as shells report them.
+#: Exit status after Ctrl-C (128 + SIGINT) and SIGTERM (128 + 15), as shells report them
+#: (SIGHUP 129, SIGQUIT 131 likewise).
 EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143
 #: Exit status when the reader of our output went away (128 + SIGPIPE), as shells report it.
@@ -31,9 +32,22 @@ def examples(*lines: str) -> str:
     return "\b\nExamples:\n" + "\n".join(f"  {line}" for line in lines)
 
 
+#: The signals that stop a program besides Ctrl-C, each handled as SIGTERM is (its
+#: temporaries removed, one line, exit 128 + its number): a kill, a closed terminal or SSH
+#: session (SIGHUP), Ctrl-backslash (SIGQUIT). Their lines.
+TERMINATING = {getattr(signal, name): said for name, said in (
+    ("SIGTERM", "terminated"), ("SIGHUP", "hung up (the terminal closed)"),
+    ("SIGQUIT", "quit")) if hasattr(signal, name)}
+
+
 class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised in the main thread so that it unwinds like Ctrl-C: temporaries
-    are removed and the worker processes are ended on the way out."""
+    """SIGTERM (or another of :data:`TERMINATING`), raised in the main thread so that it
+    unwinds like Ctrl-C: temporaries are removed and the worker processes are ended on
+    the way out."""
+
+    def __init__(self, signum: int = signal.SIGTERM):
+        super().__init__()
+        self.signum = signum
 
 
 def on_sigterm(signum, frame):
@@ -44,10 +58,11 @@ def on_sigterm(signum, frame):
     # "ignored due to race condition" for it, wherever it next checked for signals); then
     # by SIG_IGN, which Python keeps while it shuts down (its own handlers it resets to
     # the default, which would kill the process on a late second signal).
-    signal.signal(signal.SIGTERM, ignore_signal)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    for number in TERMINATING:
+        signal.signal(number, ignore_signal)
+        signal.signal(number, signal.SIG_IGN)
     STOPS.append(signum)
-    raise Terminated()
+    raise Terminated(signum)
 
 
 def on_sigint(signum, frame):
@@ -65,8 +80,9 @@ STOPS: list[int] = []
 
 
 def raise_if_stopped() -> None:
-    if signal.SIGTERM in STOPS:
-        raise Terminated()
+    for number in STOPS:
+        if number in TERMINATING:
+            raise Terminated(number)
     if STOPS:
         raise KeyboardInterrupt()
 
@@ -93,8 +109,8 @@ def stop(exc: BaseException) -> None:
     """The one line and exit status of an interruption."""
     note = getattr(exc, NOTE, "")
     if isinstance(exc, Terminated):
-        click.echo(f"vsmatch: terminated{note}", err=True)
-        sys.exit(EXIT_TERMINATED)
+        click.echo(f"vsmatch: {TERMINATING.get(exc.signum, 'terminated')}{note}", err=True)
+        sys.exit(128 + int(exc.signum))
     click.echo(f"vsmatch: interrupted{note}", err=True)
     sys.exit(EXIT_INTERRUPTED)
 

@@ -7,20 +7,27 @@ import signal
 import sys
 
 
+#: The signals besides Ctrl-C that stop the loading, their lines (as ``cli.common``'s).
+_STOPPING = {getattr(signal, name): said for name, said in (
+    ("SIGTERM", "terminated"), ("SIGHUP", "hung up (the terminal closed)"),
+    ("SIGQUIT", "quit")) if hasattr(signal, name)}
+
+
 def _terminated(signum, frame):
-    raise KeyboardInterrupt("terminated")
+    raise KeyboardInterrupt(signum)
 
 
 def main() -> None:
-    previous = signal.signal(signal.SIGTERM, _terminated)
+    previous = {number: signal.signal(number, _terminated) for number in _STOPPING}
     try:
         from . import load_group
 
         group = load_group()
     except KeyboardInterrupt as exc:
-        terminated = str(exc) == "terminated"
-        sys.stderr.write(f"vsmatch: {'terminated' if terminated else 'interrupted'}\n")
-        sys.exit(143 if terminated else 130)
+        number = exc.args[0] if exc.args and exc.args[0] in _STOPPING else None
+        sys.stderr.write(f"vsmatch: {_STOPPING[number] if number else 'interrupted'}\n")
+        sys.exit(128 + int(number) if number else 130)
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for number, handler in previous.items():
+            signal.signal(number, handler)
     group()

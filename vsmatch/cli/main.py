@@ -9,7 +9,8 @@ import threading
 import click
 
 from .. import __version__
-from .common import STOPS, OneLineErrors, examples, on_sigint, on_sigterm, quiet_unraisable_stops
+from .common import (STOPS, TERMINATING, OneLineErrors, examples, on_sigint, on_sigterm,
+                     quiet_unraisable_stops)
 
 
 @click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]},
@@ -37,7 +38,8 @@ def main(ctx: click.Context, quiet: bool, verbose: bool, debug: bool) -> None:
     _silence_opencv()
     if threading.current_thread() is threading.main_thread():
         STOPS.clear()  # a command run before in this process (tests) is over
-        signal.signal(signal.SIGTERM, on_sigterm)
+        for number in TERMINATING:  # SIGTERM, and what a closing terminal sends
+            signal.signal(number, on_sigterm)
         if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
             signal.signal(signal.SIGINT, on_sigint)
         if not getattr(sys.unraisablehook, "quiet_stops", False):

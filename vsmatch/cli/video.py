@@ -116,6 +116,9 @@ def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_p
             io.check_replaceable_folder(folder, overwrite=overwrite, ours=frames.is_frame_file)
         except OSError as exc:
             raise click.ClickException(str(exc)) from None
+    # What an earlier run of these outputs left when it was killed (SIGKILL) goes now.
+    for path in [out, *folders.values()]:
+        io.remove_stale_temporaries(io.followed_folder(path) if path != out else path)
     folder_pairs = len(names) == 2 and all(Path(name).is_dir() for name in names)
     if folder_pairs:
         pairs = frames.FolderPairs(*names)
