@@ -42,6 +42,7 @@ def test_csv_batch_carries_on_past_a_failure(pair_list, tmp_path):
     assert result.exit_code == 1
     assert "matched 2 of 3 pairs, 1 failed" in result.output
     assert "failed: " in result.output and "missing/l.png: file not found" in result.output
+    assert "\r" not in result.output  # no progress bar's carriage returns in a log
     assert np.all(np.abs(io.read_disparity(tmp_path / "out/a.pfm")[5:-5, 12:-5] - 2) < 0.5)
     assert np.all(np.abs(io.read_disparity(tmp_path / "out/b.png")[5:-5, 12:-5] - 4) < 0.5)
     assert not (tmp_path / "out/m.pfm").exists()
@@ -51,7 +52,7 @@ def test_existing_outputs_are_skipped_unless_overwrite(pair_list, tmp_path):
     invoke("batch", pair_list)
     stamp = (tmp_path / "out/a.pfm").stat().st_mtime_ns
     again = invoke("batch", pair_list)
-    assert "skipped 2 with existing output" in again.output
+    assert "skipped 2 with existing output (--overwrite matches them again)" in again.output
     assert (tmp_path / "out/a.pfm").stat().st_mtime_ns == stamp
     forced = invoke("batch", pair_list, "--overwrite")
     assert "matched 2 of 3" in forced.output and "skipped" not in forced.output

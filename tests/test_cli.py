@@ -175,6 +175,9 @@ def test_eval_json_has_the_documented_shape(data_dir, tmp_path):
     result = invoke("--quiet", "eval", "--data-root", data_dir, "--method", "census",
                     "--json", out, "--out-dir", tmp_path / "imgs")
     assert result.exit_code == 0, result.output
+    # --quiet quiets the notes, not the results: the table is the command's output.
+    assert "nonocc bad1.0 (%)" in result.output and "\ncensus " in result.output
+    assert "wrote" not in result.output
     report = json.loads(out.read_text())
     assert report["dataset"] == "middlebury2" and report["threshold"] == 1.0
     assert report["metric"] == "bad1.0"

@@ -106,7 +106,8 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
         announce_compilation(ctx)
         # The executor first: a cluster that cannot be had fails before any output.
         with make_executor(jobs, scheduler) as executor, \
-                tqdm(total=len(todo), disable=quiet, unit="pair", leave=False) as bar:
+                tqdm(total=len(todo), disable=True if quiet else None, unit="pair",
+                     leave=False) as bar:  # a bar in a terminal only (None): a log gets none
             def done(job: batch.PairJob, outcome: batch.PairOutcome) -> None:
                 bar.set_postfix_str(job.output.name)
                 bar.update(1)
@@ -120,7 +121,8 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
     total = len(jobs_list) + len(unpaired)
     failed = len(failures) + len(unpaired)
     echo(ctx, f"matched {len(todo) - len(failures)} of {total} pairs"
-               + (f", skipped {skipped} with existing output" if skipped else "")
+               + (f", skipped {skipped} with existing output (--overwrite matches them "
+                  "again)" if skipped else "")
                + (f", {failed} failed" if failed else ""))
     for path in unpaired:
         click.echo(f"failed: {path}: no frame of the same name in the other view", err=True)

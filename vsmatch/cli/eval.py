@@ -98,7 +98,8 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, overwrite
     quiet = ctx.find_root().obj.get("quiet")
     runs = len(configs) * len(scenes) * (1 + len(levels) * seeds)
     disparities = {} if figure_path is not None else None
-    with tqdm(total=runs, disable=quiet, unit="run", leave=False) as bar, \
+    # A bar in a terminal only (None): a log file gets no carriage returns.
+    with tqdm(total=runs, disable=True if quiet else None, unit="run", leave=False) as bar, \
             io.output_folder(out_dir):
         def done(method: str, scene: str) -> None:
             bar.set_postfix_str(f"{method}/{scene}")
@@ -117,9 +118,11 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, overwrite
         if levels:
             evaluation.evaluate_noise(scenes, configs, report, levels=levels, seeds=seeds,
                                       on_done=done)
-    echo(ctx, evaluation.format_tables(report))
+    # The results are the command's output: printed under --quiet too (which quiets the
+    # progress and the notes).
+    click.echo(evaluation.format_tables(report))
     if levels:
-        echo(ctx, evaluation.format_noise_table(report))
+        click.echo(evaluation.format_noise_table(report))
     if json_path is not None:
         io.write_text_atomic(json_path, json.dumps(report, indent=2) + "\n")
         echo(ctx, f"wrote {json_path}")
