@@ -50,6 +50,13 @@ def test_kitti_calibration(tmp_path):
     ("cam0=[1 0 0; 0 1 0]\nbaseline=1\n", "3x3"),
     ("cam0=[1 0 0; 0 1 0; 0 0 1]\n", "missing 'baseline'"),
     ("cam0=[1 0 0; 0 1 0; 0 0 1]\nbaseline=-4\n", "baseline must be positive"),
+    # Two cameras of other focal lengths or rows are no rectified pair.
+    (MIDDLEBURY_CALIB.replace("cam1=[1038.018 0 375.308; 0 1038.018",
+                              "cam1=[1100.0 0 375.308; 0 1100.0"),
+     "cam1's focal length 1100 differs from cam0's 1038.02: the views are not rectified"),
+    (MIDDLEBURY_CALIB.replace("375.308; 0 1038.018 243.393", "375.308; 0 1038.018 260"),
+     "cam1's principal point's row cy 260 differs"),
+    (KITTI_CALIB + "S_rect_02: 1.2e+03 3.75e+02 7\n", "S_rect_02 must be two whole"),
 ])
 def test_bad_calibration_is_one_clear_error(tmp_path, text, message):
     path = tmp_path / "calib.txt"
@@ -105,7 +112,7 @@ def test_ply_is_binary_little_endian_and_reads_back(tmp_path):
         np.stack([vertex[c] for c in ("red", "green", "blue")], axis=1), colours)
 
 
-MIDDLEBURY = ("cam0=[{f} 0 {cx}; 0 {fy} 15; {last}]\ncam1=[500 0 22.5; 0 510 15; 0 0 1]\n"
+MIDDLEBURY = ("cam0=[{f} 0 {cx}; 0 {fy} 15; {last}]\ncam1=[{f} 0 22.5; 0 {fy} 15; 0 0 1]\n"
               "doffs={doffs}\nbaseline=100\nwidth=40\nheight=30\n")
 
 
@@ -198,3 +205,17 @@ def test_the_stream_matcher_refuses_what_the_cli_refuses(kwargs, message):
 
     with pytest.raises(ValueError, match=message):
         vsmatch.StereoMatcher(**kwargs)
+
+
+def test_kitti_s_rect_gives_the_views_size_and_tiny_depths_are_refused(tmp_path):
+    """KITTI's S_rect_02 is the rectified views' size: views of another are refused as a
+    Middlebury calib.txt of another width/height is. A focal length x baseline whose
+    depths float32 reads as 0 is refused as one whose depths overflow."""
+    path = tmp_path / "calib_cam_to_cam.txt"
+    path.write_text(KITTI_CALIB + "S_rect_02: 1.242000e+03 3.750000e+02\n")
+    calib = geometry.read_calibration(path)
+    assert calib.size == (1242, 375) and calib.size_problem((375, 1242, 3)) is None
+    assert "for 1242x375 views" in calib.size_problem((370, 1226, 3))
+    tiny = geometry.Calibration(focal=1e-300, baseline=0.16)
+    assert "too small for float32 (they would read 0)" in tiny.depth_problem()
+    assert geometry.Calibration(focal=700.0, baseline=0.16).depth_problem() is None

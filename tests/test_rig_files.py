@@ -49,6 +49,10 @@ def coefficients(n):
     (dict(T=np.array([[0.0], [-60], [0]])), "not mostly along x"),
     (dict(K2=np.zeros((3, 3))), "K2 has focal lengths"),
     (dict(K1=np.array([[300.0, 0, 900], [0, 300, 48], [0, 0, 1]])), "outside the"),
+    # Lenses no camera has: the view magnified into a uniform grey, or mostly empty.
+    (dict(D1=np.array([[1e4, 0, 0, 0, 0]]), D2=np.array([[1e4, 0, 0, 0, 0]])),
+     "the rectification scales the views by 966"),
+    (dict(D1=np.array([[-1e3, 0, 0, 0, 0]])), "% of the rectified left view shows its image"),
 ])
 def test_impossible_opencv_rigs_are_refused_naming_the_key(tmp_path, rng, changes, key):
     views = write_pair(tmp_path, rng)
@@ -94,6 +98,7 @@ def test_alpha_nan_is_refused(tmp_path, rng, command):
 
 
 @pytest.mark.parametrize("changes,message", [
+    ({"distortion_coeffs": [0.1, 0.01, 0.0]}, "must be 4 numbers (k1, k2, p1, p2) or 5"),
     ({"distortion_model": "equidistant"}, "cam1's distortion_model"),
     ({"resolution": [WIDTH + 2, HEIGHT]}, "cam1's resolution"),
     ({"resolution": [WIDTH, HEIGHT, 3]}, "[width, height]"),
@@ -161,3 +166,14 @@ def test_a_fisheye_without_four_coefficients_is_named(tmp_path, coeffs):
     (tmp_path / "camchain.yaml").write_text(yaml.safe_dump(data))
     with pytest.raises(CalibrationError, match="cam0.distortion_coeffs has"):
         rig.read_rig([tmp_path / "camchain.yaml"])
+
+
+def test_a_key_given_twice_in_an_opencv_rig_is_refused(tmp_path):
+    """OpenCV keeps one of two K1 without a word (the YAML configs already refuse it)."""
+    text = opencv_text()
+    (tmp_path / "rig.yaml").write_text(text + "K1: " + text.split("K1: ")[1].split("\nK2")[0]
+                                       + "\n")
+    with pytest.raises(CalibrationError, match="rig.yaml: K1 is given twice"):
+        rig.read_rig([tmp_path / "rig.yaml"])
+    (tmp_path / "once.yaml").write_text(text)
+    assert rig.read_rig([tmp_path / "once.yaml"]).K1[0, 0] == 300.0

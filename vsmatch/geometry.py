@@ -18,6 +18,10 @@ import numpy as np
 
 #: The largest float32.
 FLOAT32_MAX = float(np.finfo(np.float32).max)
+#: The smallest normal float32, and the largest disparity a depth is taken of (a view's
+#: width; 2**20 px is beyond any camera's): f B / that must stay a normal float32.
+FLOAT32_TINY = float(np.finfo(np.float32).tiny)
+MAX_DISPARITY = 2.0**20
 
 
 class CalibrationError(ValueError):
@@ -90,6 +94,11 @@ class Calibration:
         if self.focal * self.baseline * 256 > FLOAT32_MAX:
             return (f"focal length x baseline = {self.focal * self.baseline:.3g} makes "
                     "depths too large for float32; give the baseline in a larger unit")
+        # The farthest right pixel of the widest view float32 reads: depths not 0.
+        if self.focal * self.baseline / MAX_DISPARITY < FLOAT32_TINY:
+            return (f"focal length x baseline = {self.focal * self.baseline:.3g} makes "
+                    "depths too small for float32 (they would read 0); check the focal "
+                    "length, or give the baseline in a smaller unit")
         return None
 
     def size_problem(self, shape: tuple[int, ...]) -> str | None:
@@ -177,6 +186,8 @@ def _middlebury(fields: dict[str, str]) -> Calibration:
         raise ValueError("cam0 must be a 3x3 matrix")
     if cam0[3] != 0 or not np.allclose(cam0[6:], (0, 0, 1)):
         raise ValueError("cam0 is not a camera matrix [f 0 cx; 0 fy cy; 0 0 1]")
+    if "cam1" in fields:
+        _check_rectified(cam0, _numbers(fields, "cam1"))
     ndisp = _integer(fields, "ndisp") if "ndisp" in fields else None
     doffs = _number(fields, "doffs") if "doffs" in fields else 0.0
     min_disp = _integer(fields, "dmin") if "dmin" in fields else 0
@@ -186,6 +197,20 @@ def _middlebury(fields: dict[str, str]) -> Calibration:
     return Calibration(focal=cam0[0], baseline=_number(fields, "baseline"), cx=cam0[2],
                        cy=cam0[5], doffs=doffs, focal_y=cam0[4], ndisp=ndisp, size=size,
                        min_disp=min_disp)
+
+
+def _check_rectified(cam0: np.ndarray, cam1: np.ndarray) -> None:
+    """A rectified pair's two cameras share their focal lengths and their principal
+    point's row (cam1's cx may differ: doffs); otherwise the views are not rectified."""
+    if cam1.size != 9:
+        raise ValueError("cam1 must be a 3x3 matrix")
+    for name, k, tolerance in (("focal length", 0, 1e-3 * abs(cam0[0])),
+                               ("vertical focal length", 4, 1e-3 * abs(cam0[4])),
+                               ("principal point's row cy", 5, 0.5)):
+        if not abs(cam1[k] - cam0[k]) <= tolerance:
+            raise ValueError(f"cam1's {name} {cam1[k]:g} differs from cam0's {cam0[k]:g}: "
+                             "the views are not rectified as one camera (rectify them "
+                             "first, from the raw rig's calibration)")
 
 
 def _integer(fields: dict[str, str], key: str) -> int:
@@ -209,8 +234,14 @@ def _kitti(fields: dict[str, str]) -> Calibration:
     focal = p2[0]
     # P = K [I | t]: P[0, 3] = f t_x; the right camera sits at +B along x.
     baseline = (p2[3] - p3[3]) / focal
+    size = None
+    if "S_rect_02" in fields:  # the rectified views' size (width, height)
+        rect = _numbers(fields, "S_rect_02")
+        if rect.size != 2 or not np.all(rect == np.round(rect)) or not np.all(rect >= 1):
+            raise ValueError("S_rect_02 must be two whole numbers (width, height)")
+        size = (int(rect[0]), int(rect[1]))
     return Calibration(focal=focal, baseline=baseline, cx=p2[2], cy=p2[6],
-                       doffs=p3[2] - p2[2], focal_y=p2[5])
+                       doffs=p3[2] - p2[2], focal_y=p2[5], size=size)
 
 
 def depth_from_disparity(disp: np.ndarray, calib: Calibration) -> np.ndarray:

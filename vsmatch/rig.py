@@ -23,6 +23,7 @@ Calibration`, in the calibration's units. Disparity, depth and points are then i
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
@@ -56,6 +57,7 @@ class RawRig:
     model: str = "pinhole"
     rectify: tuple[np.ndarray, np.ndarray] | None = None
     project: tuple[np.ndarray, np.ndarray] | None = None
+    source: str = ""  # the file(s) it was read from, for messages
 
 
 def is_raw_rig(paths) -> bool:
@@ -73,6 +75,10 @@ def read_rig(paths) -> RawRig:
     """The raw rig of one OpenCV or Kalibr file, or of a left and a right ROS
     ``camera_info`` or EuRoC ``sensor.yaml`` file."""
     paths = [Path(p) for p in paths]
+    return dataclasses.replace(_read_rig(paths), source=", ".join(str(p) for p in paths))
+
+
+def _read_rig(paths: list[Path]) -> RawRig:
     if len(paths) == 2:
         first = _mapping(paths[0])
         if isinstance(first, dict) and "T_BS" in first:
@@ -120,6 +126,10 @@ def _opencv_mapping(path: Path) -> dict:
     if not opened:
         raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file (malformed "
                                "or truncated YAML/XML)")
+    twice = _repeated_top_keys(path)
+    if twice:
+        storage.release()
+        raise CalibrationError(f"{path}: {twice} is given twice (which one holds?)")
     try:
         root = storage.root()
         return {key: _plain(root.getNode(key)) for key in root.keys()}
@@ -127,6 +137,23 @@ def _opencv_mapping(path: Path) -> dict:
         raise CalibrationError(f"{path}: not a readable OpenCV FileStorage file") from None
     finally:
         storage.release()
+
+
+def _repeated_top_keys(path: Path) -> str | None:
+    """The first top-level key an OpenCV YAML file gives twice (OpenCV keeps one of them
+    without a word), or None; XML files are not looked at."""
+    seen = set()
+    try:
+        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    except OSError:
+        return None
+    for line in lines:
+        match = re.match(r"([A-Za-z_][\w]*)\s*:", line)  # a key at the start of a line
+        if match:
+            if match.group(1) in seen:
+                return match.group(1)
+            seen.add(match.group(1))
+    return None
 
 
 def _plain(node, depth: int = 0):
@@ -488,6 +515,9 @@ def _pinhole_camera(path: Path, name: str, cam, coeffs_key: str):
     K = _matrix(path, f"{name}.intrinsics", [[fu, 0, pu], [0, fv, pv], [0, 0, 1]], (3, 3))
     D = _matrix(path, f"{name}.{coeffs_key}", coeffs, (len(coeffs),))
     if model in RADTAN:
+        if D.size not in (4, 5):  # three would be padded into a different lens
+            raise CalibrationError(f"{path}: {name}.{coeffs_key} must be 4 numbers (k1, k2, "
+                                   f"p1, p2) or 5 (and k3) for {model}, has {D.size}")
         D = np.concatenate([D, np.zeros(max(0, 5 - D.size))])
     return K, D, "fisheye" if model == EQUIDISTANT else "pinhole", size
 
@@ -526,6 +556,19 @@ def _opencv_reason(exc: Exception) -> str:
     return text.split(") ", 1)[-1].split(" in function")[0][:200]
 
 
+#: A rectification that scales the views by more than this (or less than its inverse), or
+#: leaves less than MIN_SHOWN of a view showing the camera's image, comes from a lens no
+#: camera has (distortion k1 = 1e4 gave a focal length of 2.9e5 px from 300, the view a
+#: uniform grey; k1 = -1e3 showed 8 % of the image). Real lenses: a scale of 0.97-1.04
+#: and 96-100 % shown (k1 from -0.3 to 0.5, alpha 0 and 1).
+MAX_RECTIFIED_SCALE, MIN_SHOWN = 10.0, 0.2
+
+
+def _listed(values) -> str:
+    """Coefficients as a short list (``[0.1, -0.02, 0, 0, 0]``)."""
+    return "[" + ", ".join(f"{float(v):.3g}" for v in np.ravel(values)) + "]"
+
+
 class Rectifier:
     """The rectification of a raw rig, computed once for an image size and reused.
 
@@ -546,6 +589,28 @@ class Rectifier:
         except cv2.error as exc:
             raise CalibrationError("OpenCV cannot rectify with this calibration "
                                    f"({_opencv_reason(exc)})") from None
+        problem = self._lens_problem(rig)
+        if problem is not None:
+            named = f"{rig.source}: " if rig.source else ""
+            raise CalibrationError(f"{named}{problem}: no camera's lens does that; check the "
+                                   f"distortion coefficients (left {_listed(rig.D1)}, "
+                                   f"right {_listed(rig.D2)})")
+
+    def _lens_problem(self, rig: RawRig) -> str | None:
+        """What is absurd about this rectification, or None: views scaled by more than
+        :data:`MAX_RECTIFIED_SCALE` (either way), or less than :data:`MIN_SHOWN` of a
+        rectified view showing the camera's image."""
+        scale = float(self.projections[0][0, 0]) / float(rig.K1[0, 0])
+        if not 1 / MAX_RECTIFIED_SCALE <= scale <= MAX_RECTIFIED_SCALE:
+            return (f"the rectification scales the views by {scale:.3g} (a focal length of "
+                    f"{float(self.projections[0][0, 0]):.0f} px from {float(rig.K1[0, 0]):.0f})")
+        width, height = self.size
+        for side, (mx, my) in zip(("left", "right"), self.maps):
+            shown = float(((mx >= 0) & (mx <= width - 1) & (my >= 0)
+                           & (my <= height - 1)).mean())
+            if shown < MIN_SHOWN:
+                return f"only {100 * shown:.0f} % of the rectified {side} view shows its image"
+        return None
 
     def _make_maps(self, rig: RawRig, size: tuple[int, int], alpha: float) -> None:
         if rig.rectify is not None and rig.project is not None:
