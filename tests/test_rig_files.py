@@ -177,3 +177,31 @@ def test_a_key_given_twice_in_an_opencv_rig_is_refused(tmp_path):
         rig.read_rig([tmp_path / "rig.yaml"])
     (tmp_path / "once.yaml").write_text(text)
     assert rig.read_rig([tmp_path / "once.yaml"]).K1[0, 0] == 300.0
+
+
+def test_json_rigs_are_read_and_unknown_files_name_the_formats(tmp_path, data_dir):
+    """A rig as JSON (cv2.stereoCalibrate's names, or the published rig.json's intrinsic1,
+    distCoeffs1, res1) is read as its YAML is; one EuRoC sensor.yaml says the other camera's
+    is needed; a file of no known kind names the kinds read."""
+    import json
+
+    raw = data_dir / "real-cameras" / "ukulele-raw"
+    published, as_yaml = rig.read_rig([raw / "rig.json"]), rig.read_rig([raw / "rig.yml"])
+    for key in ("K1", "D1", "K2", "D2", "R", "T"):
+        np.testing.assert_allclose(getattr(published, key), getattr(as_yaml, key), rtol=1e-9)
+    assert published.size == as_yaml.size == (1280, 720)
+    values = {"K1": [[300, 0, 80], [0, 300, 48], [0, 0, 1]], "K2": [[300, 0, 80], [0, 300, 48],
+              [0, 0, 1]], "D1": [0, 0, 0, 0, 0], "D2": [0, 0, 0, 0, 0],
+              "R": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "T": [-60, 0, 0],
+              "image_width": WIDTH, "image_height": HEIGHT}
+    (tmp_path / "mine.json").write_text(json.dumps(values))
+    assert rig.is_raw_rig([tmp_path / "mine.json"])
+    assert rig.read_rig([tmp_path / "mine.json"]).T[0] == -60
+    sensor = data_dir / "real-cameras" / "euroc-clip" / "cam0" / "sensor.yaml"
+    with pytest.raises(CalibrationError, match="describes one camera; give both cameras'"):
+        rig.read_rig([sensor])
+    from vsmatch.geometry import read_calibration
+
+    (tmp_path / "other.json").write_text('{"a": 1}')
+    with pytest.raises(CalibrationError, match="nor a raw rig \\(OpenCV stereoCalibrate"):
+        read_calibration(tmp_path / "other.json")

@@ -154,7 +154,10 @@ def read_calibration(path: str | Path) -> Calibration:
     except CalibrationError as exc:
         raise CalibrationError(f"{path}: {exc}") from None
     raise CalibrationError(f"{path}: not a Middlebury calib.txt (cam0=...) or a KITTI "
-                           "calib_cam_to_cam.txt (P_rect_02, P_rect_03)")
+                           "calib_cam_to_cam.txt (P_rect_02, P_rect_03), nor a raw rig "
+                           "(OpenCV stereoCalibrate YAML, XML or JSON: K1, D1, K2, D2, R, "
+                           "T; Kalibr camchain; ROS camera_info or EuRoC sensor.yaml, left "
+                           "and right)")
 
 
 def _describe(exc: Exception) -> str:

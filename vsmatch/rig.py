@@ -68,7 +68,9 @@ def is_raw_rig(paths) -> bool:
     text = _read(paths[0])
     return _written_by_opencv(text) or (
         "cam0:" in text and "cam1:" in text) or "camera_matrix" in text or any(
-        re.search(rf"^{key}\s*:", text, re.MULTILINE) for key in STEREO_CALIBRATE_KEYS)
+        re.search(rf"^{key}\s*:", text, re.MULTILINE)
+        or re.search(rf'"{key}"\s*:', text) for key in STEREO_CALIBRATE_KEYS) or (
+        "T_BS" in text and "intrinsics" in text)  # one EuRoC sensor.yaml: said below
 
 
 def read_rig(paths) -> RawRig:
@@ -90,6 +92,10 @@ def _read_rig(paths: list[Path]) -> RawRig:
     path = paths[0]
     text = _read(path)
     data = _opencv_mapping(path) if _written_by_opencv(text) else _yaml(path, text)
+    if isinstance(data, dict) and "T_BS" in data:
+        raise CalibrationError(f"{path}: a EuRoC sensor.yaml describes one camera; give "
+                               "both cameras' (--calib cam0/sensor.yaml --calib "
+                               "cam1/sensor.yaml)")
     if isinstance(data, dict) and data.keys() & set(STEREO_CALIBRATE_KEYS):
         return _stereo_calibrate_rig(path, data)
     if isinstance(data, dict) and "cam0" in data and "cam1" in data:
@@ -106,7 +112,7 @@ ROS_HINT = ("{path}: a ROS camera_info file describes one camera; give the left 
 
 
 #: Keys that make a file a cv2.stereoCalibrate rig (OpenCV FileStorage or plain YAML).
-STEREO_CALIBRATE_KEYS = ("K1", "M1", "cameraMatrix1")
+STEREO_CALIBRATE_KEYS = ("K1", "M1", "cameraMatrix1", "intrinsic1")
 
 
 def _written_by_opencv(text: str) -> bool:
@@ -307,12 +313,12 @@ def _opencv(path: Path) -> RawRig:
 
 def _stereo_calibrate_rig(path: Path, data: dict) -> RawRig:
     """The rig of a mapping with cv2.stereoCalibrate's names (``K1``/``M1``/
-    ``cameraMatrix1``, ``D1``/``distCoeffs1``, the same for camera 2, ``R``, ``T``, and
-    ``image_width``/``image_height`` or ``imageSize``), from an OpenCV FileStorage file or
-    a plain YAML file."""
+    ``cameraMatrix1``/``intrinsic1``, ``D1``/``distCoeffs1``, the same for camera 2, ``R``,
+    ``T``, and ``image_width``/``image_height``, ``imageSize`` or ``res1``), from an OpenCV
+    FileStorage file, a plain YAML file or JSON (as the published ``rig.json`` files)."""
     values, found = {}, {}
-    for key, names, shape in (("K1", ("K1", "M1", "cameraMatrix1"), (3, 3)),
-                              ("K2", ("K2", "M2", "cameraMatrix2"), (3, 3)),
+    for key, names, shape in (("K1", ("K1", "M1", "cameraMatrix1", "intrinsic1"), (3, 3)),
+                              ("K2", ("K2", "M2", "cameraMatrix2", "intrinsic2"), (3, 3)),
                               ("R", ("R",), (3, 3)), ("T", ("T",), (3,))):
         name = _first_key(path, data, names)
         values[key] = _matrix(path, name, _numbers_of(path, name, data[name]), shape)
@@ -329,12 +335,14 @@ def _stereo_calibrate_rig(path: Path, data: dict) -> RawRig:
     if "image_width" in data and "image_height" in data:
         size = (_whole_number(path, "image_width", data["image_width"]),
                 _whole_number(path, "image_height", data["image_height"]))
-    elif "imageSize" in data:
-        numbers = _numbers_of(path, "imageSize", data["imageSize"])
-        if numbers.size != 2:
-            raise CalibrationError(f"{path}: imageSize must be two numbers (width, "
-                                   f"height), has {numbers.size}")
-        size = tuple(_whole_number(path, "imageSize", [v]) for v in numbers)
+    else:
+        name = _first_key(path, data, ("imageSize", "res1"), required=False)
+        if name is not None:
+            numbers = _numbers_of(path, name, data[name])
+            if numbers.size != 2:
+                raise CalibrationError(f"{path}: {name} must be two numbers (width, "
+                                       f"height), has {numbers.size}")
+            size = tuple(_whole_number(path, name, [v]) for v in numbers)
     return check_rig(path, RawRig(size=size, **values), found)
 
 
