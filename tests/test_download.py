@@ -195,3 +195,22 @@ def test_a_failed_download_leaves_no_empty_folder(tmp_path):
                                        f"http://127.0.0.1:{port}"])
     assert result.exit_code == 1 and "download failed" in result.output
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_mirror_folder_is_copied_from(tmp_path):
+    """--mirror FOLDER (or file://FOLDER) showed pooch's "Unrecognized URL protocol
+    'file'"; the archives are now copied from it, and a folder without them is named."""
+    mirror = tmp_path / "archives"
+    mirror.mkdir()
+    make_archives(mirror)
+    for given, to in ((str(mirror), tmp_path / "a"), (mirror.as_uri(), tmp_path / "b")):
+        result = CliRunner().invoke(main, ["-q", "datasets", "download", "middlebury2014",
+                                           "--resolution", "Q", "--to", str(to),
+                                           "--mirror", given])
+        assert result.exit_code == 0, result.output
+        assert sorted(p.name for p in (to / "middlebury2014-quarter").iterdir()) == list(SCENES)
+    result = CliRunner().invoke(main, ["datasets", "download", "middlebury2014", "--resolution",
+                                       "Q", "--to", str(tmp_path / "c"), "--mirror",
+                                       str(tmp_path / "nowhere")])
+    assert result.exit_code == 1 and "no such folder" in result.output
+    assert "Unrecognized" not in result.output and "Traceback" not in result.output

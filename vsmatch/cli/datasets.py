@@ -49,8 +49,9 @@ def datasets_list(ctx, data_root):
               show_default=True, help="Middlebury 2014 size: quarter, half or full.")
 @click.option("--to", "to", type=click.Path(file_okay=False), required=True,
               help="The data root to put it in (DIR/middlebury2014-quarter/ ...).")
-@click.option("--mirror", default=None, metavar="URL",
-              help="Fetch the archives from this base URL instead of Middlebury's.")
+@click.option("--mirror", default=None, metavar="URL|FOLDER",
+              help="Fetch the archives from this base URL instead of Middlebury's, or copy "
+                   "them from this folder (or file:// URL).")
 @verbosity_options
 @click.pass_context
 @friendly_errors

@@ -12,10 +12,12 @@ appears whole or not at all (it is built beside its place and renamed into it).
 from __future__ import annotations
 
 import glob
+import os
 import shutil
 import tempfile
 import zipfile
 from pathlib import Path
+from urllib.parse import unquote, urlparse
 
 from ..io import current_umask, output_folder
 from .base import DatasetError
@@ -87,9 +89,34 @@ def download_middlebury2014(resolution: str, to: str | Path, *, mirror: str | No
     return target, True
 
 
+def _local_mirror(base_url: str) -> Path | None:
+    """The folder a ``--mirror`` names (a path, or a ``file://`` URL), or None for a URL
+    to download from."""
+    if base_url.startswith("file://"):
+        return Path(unquote(urlparse(base_url).path))
+    if "://" not in base_url:
+        return Path(base_url)
+    return None
+
+
 def _fetch(name: str, base_url: str, cache: Path, progress: bool, retries: int) -> Path:
-    """One archive in the cache (downloaded unless there already); pooch writes it under
-    a temporary name and renames it when complete."""
+    """One archive in the cache (downloaded unless there already, or copied from a mirror
+    folder); pooch writes it under a temporary name and renames it when complete."""
+    folder = _local_mirror(base_url)
+    if folder is not None:
+        source = folder / name
+        if not folder.is_dir():
+            raise DownloadError(f"--mirror {base_url}: no such folder (give a folder that "
+                                "holds the archives, or an http(s) or ftp URL)")
+        if not source.is_file():
+            raise DownloadError(f"{source}: not in the mirror folder")
+        target = cache / name
+        if not target.is_file():
+            cache.mkdir(parents=True, exist_ok=True)
+            partial = cache / f".{name}.partial"
+            shutil.copyfile(source, partial)
+            os.replace(partial, target)
+        return target
     import pooch
     import requests
 
