@@ -145,8 +145,10 @@ def test_thread_series_times_each_count_and_sets_the_threads_back():
     scene = Scene("synthetic", pair.left, pair.right, pair.disparity,
                   {"nonocc": pair.nonocc, "all": pair.nonocc}, 40)
     counts = sorted({1, bench.max_threads()})
-    result = bench.time_pairs([(scene, Scoring.bad(1.0))], ["fast"], rounds=1,
-                              threads=counts)
+    done = []
+    result = bench.time_pairs([(scene, Scoring.bad(1.0)), (scene, Scoring.bad(1.0))], ["fast"],
+                              rounds=1, threads=counts, on_done=done.append)
+    assert done == ["synthetic", "synthetic"]  # the progress: a call a pair
     assert (numba.get_num_threads(), cv2.getNumThreads()) == before
     assert result["threads"] == counts
     series = result["by_threads"]
@@ -173,3 +175,21 @@ def test_bench_refuses_thread_counts_it_cannot_set_before_any_work(tmp_path):
                                       str(tmp_path / "b.json")])
         assert result.exit_code == 2 and message in result.output
         assert not (tmp_path / "b.json").exists()
+
+
+def test_the_progress_counts_every_step_of_the_benchmark(data_dir, monkeypatch):
+    """`vsmatch bench` runs for minutes: its bar's total is the calls run_benchmark makes."""
+    calls = []
+
+    def time_pairs(pairs, *args, on_done=None, **kwargs):  # the pairs' calls, no timing
+        for scene, _ in pairs:
+            on_done(scene.name)
+        return {}
+
+    monkeypatch.setattr(bench, "time_pairs", time_pairs)
+    monkeypatch.setattr(bench, "run_command", lambda *a: {})
+    monkeypatch.setattr(bench, "memory", lambda *a: {})
+    monkeypatch.setattr(bench, "cold_start", lambda *a: {})
+    monkeypatch.setattr(bench, "size_run", lambda *a, **k: {})
+    bench.run_benchmark(data_dir, ["fast"], 1, on_done=calls.append)
+    assert len(calls) == bench.steps(data_dir) > len(bench.standard_pairs(data_dir))

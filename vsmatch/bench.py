@@ -27,7 +27,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import cv2
 import numpy as np
@@ -86,7 +86,8 @@ def max_threads() -> int:
 
 
 def time_pairs(pairs, configs=BENCH_CONFIGS, rounds: int = 5,
-               peers=tuple(SGBM_MODES), threads=None) -> dict[str, Any]:
+               peers=tuple(SGBM_MODES), threads=None,
+               on_done: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Each config and SGBM mode on each ``(scene, scoring)`` pair, one after the other
     for ``rounds`` rounds; the fastest time of each, the stage times of that run, and its
     error (the scoring's headline on the non-occluded pixels: bad 1.0 on middlebury2,
@@ -96,7 +97,8 @@ def time_pairs(pairs, configs=BENCH_CONFIGS, rounds: int = 5,
     ``threads``: thread counts (Numba's and OpenCV's both) to time each method at, taken
     in turn within every round so that the machine's moods fall on all of them alike; the
     result's ``by_threads`` holds each count's ``scenes`` and ``total``, and ``scenes``
-    and ``total`` are the last count's. Default: the threads as they are set."""
+    and ``total`` are the last count's. Default: the threads as they are set.
+    ``on_done(name)`` is called after each pair (progress)."""
     scenes = [scene for scene, _ in pairs]
     cfgs = {name: load_config(name) for name in configs}
     warm = scenes[0]
@@ -149,6 +151,8 @@ def time_pairs(pairs, configs=BENCH_CONFIGS, rounds: int = 5,
             by_threads[n][scene.name] = {
                 name: {"seconds": best[n, name], "stages": stages.get((n, name), {}),
                        **scores[name]} for name in methods}
+        if on_done is not None:
+            on_done(scene.name)
     series = {("as set" if n is None else n): {"scenes": per_scene,
                                                "total": _totals(per_scene, methods)}
               for n, per_scene in by_threads.items()}
@@ -363,10 +367,12 @@ def _child_size(argv: list[str]) -> None:
 
 
 def run_benchmark(data_root=None, configs=BENCH_CONFIGS, rounds: int = 5,
-                  cold: bool = True, size: bool = True, threads=None) -> dict[str, Any]:
+                  cold: bool = True, size: bool = True, threads=None,
+                  on_done: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Everything :mod:`vsmatch.bench` measures, as one JSON-ready dict. Start-up,
     the whole command and memory are measured for the first config; ``threads``: the
-    thread counts the standard pairs are timed at (:func:`time_pairs`)."""
+    thread counts the standard pairs are timed at (:func:`time_pairs`); ``on_done(name)``
+    after each pair and each step after them (progress: :func:`steps` of them in all)."""
     import numba
 
     configs = list(configs)
@@ -377,23 +383,43 @@ def run_benchmark(data_root=None, configs=BENCH_CONFIGS, rounds: int = 5,
     report: dict[str, Any] = {
         "configs": configs,
         "threads": {"numba": numba.get_num_threads(), "opencv": cv2.getNumThreads()},
-        "pairs": time_pairs(standard_pairs(data_root), configs, rounds, threads=threads),
+        "pairs": time_pairs(standard_pairs(data_root), configs, rounds, threads=threads,
+                            on_done=on_done),
         "run_command_cones": run_command(left, right, cones_disp, first, 3),
         "memory_cones": memory(left, right, cones_disp, first)}
+    done = on_done or (lambda name: None)
+    done("whole command and memory")
     if cold:
         report["cold_start_cones"] = cold_start(left, right, cones_disp, first)
+        done("start-up")
     if size:
         runs = []
         for entry in SIZE_SERIES:
-            try:
-                datasets.load_dataset(entry[1], data_root, names=[entry[2]])
-            except datasets.DatasetError:
+            if not _has_scene(data_root, entry):
                 continue  # e.g. no KITTI on this machine
             runs += [size_run(data_root, "vsmatch", entry, c) for c in configs]
             runs += [size_run(data_root, peer, entry) for peer in SIZE_PEERS]
+            done(f"size {entry[0]}")
         runs.append(size_run(data_root, "vsmatch", SIZE_SERIES[-1], first, tall=True))
+        done("size 4x twice as tall")
         report["size"] = runs
     return report
+
+
+def steps(data_root=None, cold: bool = True, size: bool = True) -> int:
+    """How many times :func:`run_benchmark` calls its ``on_done``."""
+    count = len(standard_pairs(data_root)) + 1 + cold
+    if size:
+        count += 1 + sum(1 for entry in SIZE_SERIES if _has_scene(data_root, entry))
+    return count
+
+
+def _has_scene(data_root, entry) -> bool:
+    try:
+        datasets.load_dataset(entry[1], data_root, names=[entry[2]])
+    except datasets.DatasetError:
+        return False
+    return True
 
 
 def tradeoff_figure(report: dict[str, Any]) -> np.ndarray:

@@ -97,8 +97,6 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
                     raise click.ClickException(
                         f"{job.describe()}: {path} exists but {job.output} does not: it is "
                         "not this batch's output (--overwrite replaces it)")
-    for folder in missing_folders:
-        folder.mkdir(parents=True, exist_ok=True)
     skipped = len(jobs_list) - len(todo)
     quiet = ctx.find_root().obj.get("quiet")
     failures = []
@@ -108,6 +106,10 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
         with make_executor(jobs, scheduler) as executor, \
                 tqdm(total=len(todo), disable=True if quiet else None, unit="pair",
                      leave=False) as bar:  # a bar in a terminal only (None): a log gets none
+            # The output folders once the executor is had: a cluster that cannot be
+            # reached leaves none behind.
+            for folder in missing_folders:
+                folder.mkdir(parents=True, exist_ok=True)
             def done(job: batch.PairJob, outcome: batch.PairOutcome) -> None:
                 bar.set_postfix_str(job.output.name)
                 bar.update(1)

@@ -74,8 +74,18 @@ def bench_command(ctx, data_root, configs, rounds, no_cold, no_size, threads, js
     configs = configs or bench.BENCH_CONFIGS
     for config in configs:
         load_config(config)
-    report = bench.run_benchmark(data_root, configs, rounds, cold=not no_cold,
-                                 size=not no_size, threads=counts)
+    from tqdm import tqdm
+
+    quiet = ctx.find_root().obj.get("quiet")
+    # Several minutes in all: a bar in a terminal (None: none in a log file).
+    with tqdm(total=bench.steps(data_root, not no_cold, not no_size),
+              disable=True if quiet else None, unit="step", leave=False) as bar:
+        def done(name: str) -> None:
+            bar.set_postfix_str(name)
+            bar.update(1)
+
+        report = bench.run_benchmark(data_root, configs, rounds, cold=not no_cold,
+                                     size=not no_size, threads=counts, on_done=done)
     echo(ctx, bench.format_report(report))
     if json_path is not None:
         io.write_text_atomic(json_path, json.dumps(report, indent=2) + "\n")
