@@ -74,16 +74,18 @@ def lowest_cloud_threshold() -> float:
 
 @pytest.fixture
 def small_disk(tmp_path):
-    """``small_disk(kilobytes)``: a folder on a tmpfs that small (a disk that fills up),
-    unmounted after the test; skips where tmpfs cannot be mounted."""
+    """``small_disk(kilobytes, read_only=False)``: a folder on a tmpfs that small (a disk
+    that fills up; or mounted read-only), unmounted after the test; skips where tmpfs
+    cannot be mounted."""
     import subprocess
 
     mounted = []
 
-    def mount(kilobytes: int):
+    def mount(kilobytes: int, read_only: bool = False):
         disk = tmp_path / f"disk{len(mounted)}"
         disk.mkdir()
-        if subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={kilobytes}k", "tmpfs",
+        options = ("ro," if read_only else "") + f"size={kilobytes}k"
+        if subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs",
                            str(disk)], capture_output=True).returncode != 0:
             pytest.skip("cannot mount a small tmpfs here")
         mounted.append(disk)

@@ -181,3 +181,17 @@ def test_a_link_to_nothing_as_an_output_folder_is_one_line(tmp_path, data_dir, c
     line = result.output.strip().splitlines()[-1]
     assert f"a link to {tmp_path / 'nowhere'}, which does not exist" in line
     assert "Errno" not in result.output and not (tmp_path / "nowhere").exists()
+
+
+def test_eval_on_a_read_only_mount_is_refused_before_the_matching(small_disk, data_dir,
+                                                                  monkeypatch):
+    """It read '[Errno 30] Read-only file system' after every scene was matched."""
+    from vsmatch import evaluation
+
+    disk = small_disk(64, read_only=True)
+    monkeypatch.setattr(evaluation, "evaluate", lambda *a, **k: pytest.fail("matched"))
+    result = invoke("eval", "--dataset", "middlebury2", "--data-root", data_dir, "--method",
+                    "census", "--out-dir", disk / "runs")
+    assert result.exit_code == 1, result.output
+    assert f"folder '{disk}' is not writable" in result.output
+    assert "Errno" not in result.output

@@ -10,8 +10,9 @@ import click
 from .. import datasets, evaluation, io
 from ..config import load_config
 from ..peers import PEER_METHODS
-from .common import (POSITIVE, add_note, check_outputs, check_outside, data_root_option, echo,
-                     examples, friendly_errors, verbose, verbosity_options)
+from .common import (POSITIVE, add_note, check_new_folder, check_outputs, check_outside,
+                     data_root_option, echo, examples, friendly_errors, verbose,
+                     verbosity_options)
 
 from .main import main
 
@@ -87,6 +88,7 @@ def eval_command(ctx, dataset, data_root, methods, json_path, out_dir, overwrite
     check_outside(datasets.dataset_folder(dataset, data_root),
                   [json_path, figure_path, out_dir], "data set")
     if out_dir is not None:
+        check_new_folder(Path(out_dir))  # a read-only one is said before the matching
         _check_method_folders(ctx, Path(out_dir), list(configs), data_root, overwrite)
     scenes = datasets.load_dataset(dataset, data_root)
     ranges = evaluation.scene_ranges(scenes, auto=range_mode == "auto")
