@@ -77,3 +77,19 @@ def test_the_imports_have_no_cycle_but_the_known_one():
 def test_the_cycle_finder_finds_a_cycle():
     graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
     assert cycles(graph) == [{"a", "b", "c"}]
+
+
+def test_no_window_function_is_used_so_any_opencv_wheel_serves():
+    """vsmatch depends on opencv-python-headless, and runs as well on the wheel with windows
+    a user may have (docs/python.md, "Beside opencv-python"): only while it calls no
+    highgui window function, which the headless wheels lack."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    window = re.compile(r"cv2\.(imshow|namedWindow|waitKey|destroy\w*Window\w*|selectROI"
+                        r"|createTrackbar|setMouseCallback|moveWindow|resizeWindow)\b")
+    used = [f"{path.relative_to(root)}: {m.group(0)}"
+            for folder in ("vsmatch", "scripts") for path in (root / folder).rglob("*.py")
+            for m in window.finditer(path.read_text())]
+    assert used == []
