@@ -96,3 +96,7 @@ def test_what_a_killed_video_left_is_removed_by_the_next_run(tmp_path, rng):
     assert result.exit_code == 0, result.output
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         ".d.mine.tmp.avi", "d.avi", "fr", "l.avi", "r.avi"]
+    # Each is named as it goes.
+    for name in (".d.k3j4h2g1.tmp.avi", ".fr.a8b7c6d5.tmp"):
+        assert f"removed {tmp_path / name}, left by an earlier run that was killed" \
+            in result.output

@@ -432,15 +432,16 @@ def _temporary_suffix(path: Path) -> str:
     return f".tmp{path.suffix}"
 
 
-def remove_stale_temporaries(path: str | Path) -> None:
+def remove_stale_temporaries(path: str | Path) -> list[Path]:
     """Remove the temporary files (or staged folders, :func:`staged_folder`) that writes
     of ``path`` left behind when their process was killed (a normal failure removes its
-    own). Only for when no write of ``path`` is under way."""
+    own), and return them. Only for when no write of ``path`` is under way."""
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
     prefix, suffix = _temporary_prefix(path), _temporary_suffix(path)
+    removed: list[Path] = []
     if not folder.is_dir():
-        return
+        return removed
     for candidate in folder.glob(f"{glob.escape(prefix)}*{glob.escape(suffix)}"):
         middle = candidate.name[len(prefix):-len(suffix)]
         if re.fullmatch(r"[a-z0-9_]{8}", middle):  # tempfile's random part, nothing else
@@ -448,6 +449,8 @@ def remove_stale_temporaries(path: str | Path) -> None:
                 shutil.rmtree(candidate, ignore_errors=True)
             else:
                 candidate.unlink(missing_ok=True)
+            removed.append(candidate)
+    return removed
 
 
 def current_umask() -> int:

@@ -164,7 +164,9 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
                           config=cfg)
     for path in outputs:
         if path is not None:
-            io.remove_stale_temporaries(path)
+            for left_over in io.remove_stale_temporaries(path):
+                echo(ctx, f"removed {left_over}, left by an earlier run that was killed",
+                     err=True)
     disp = result.disparity
     if min_confidence is not None:  # every output, the disparity too
         disp = confidence.keep_confident(disp, result.confidence, min_confidence)

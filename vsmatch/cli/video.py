@@ -118,7 +118,10 @@ def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_p
             raise click.ClickException(str(exc)) from None
     # What an earlier run of these outputs left when it was killed (SIGKILL) goes now.
     for path in [out, *folders.values()]:
-        io.remove_stale_temporaries(io.followed_folder(path) if path != out else path)
+        for left_over in io.remove_stale_temporaries(
+                io.followed_folder(path) if path != out else path):
+            echo(ctx, f"removed {left_over}, left by an earlier run that was killed",
+                 err=True)
     folder_pairs = len(names) == 2 and all(Path(name).is_dir() for name in names)
     if folder_pairs:
         pairs = frames.FolderPairs(*names)
