@@ -6,7 +6,7 @@ without the temporal mode beside SGBM on the same rectified frames, and a pictur
 side by side (left view above, the video's frame below: pixels under the cloud's threshold
 dimmed, a colour bar in depth, metres).
 
-    python scripts/euroc_clip.py [--data-root D] [--config fast] [--picture docs/euroc_clip.png]
+    python scripts/euroc_clip.py [--data-root D] [--config fast] [--picture clip.png]
 """
 
 from __future__ import annotations
