@@ -208,7 +208,7 @@ def test_confidence_through_stripes_and_the_pyramid(data_dir):
     for result in (whole, striped, pyramid):
         measured = evaluation.confidence_measures(result.disparity, result.confidence, scene,
                                                   scoring)
-        assert measured["r"] < 0.35
+        assert measured["r"] < 0.09  # measured 0.043 whole and striped, 0.067 a level down
 
 
 # --- on real data: ahead of the peers -------------------------------------------------------

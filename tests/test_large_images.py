@@ -266,7 +266,8 @@ def test_coarse_to_fine_on_an_upscaled_pair_is_accurate(data_dir):
     assert metrics.bad_percent(result.disparity, gt, mask, 4.0) < BAD4_2X_LIMIT
 
 
-BAD4_2X_LIMIT = 6.0
+#: Measured 2.03 (2026-11-27); the ceiling holds it with a small margin.
+BAD4_2X_LIMIT = 2.3
 
 
 @pytest.mark.data

@@ -78,7 +78,7 @@ def test_default_under_five_percent_noise_beats_the_paper(middlebury2):
     evaluation.evaluate_noise(middlebury2, {"default": "default"}, report, levels=[0.05],
                               seeds=1)
     figure = report["methods"]["default"]["noise"]["0.05"]["avg"]["nonocc"]
-    assert figure < 8.65  # the paper's Table 2 at 5 %; measured 8.00 (seed 0)
+    assert figure < 8.25  # measured 8.00 (seed 0); the paper's Table 2 at 5 %: 8.65
 
 
 def test_clean_views_stay_below_the_noise_floor(middlebury2, data_dir):
@@ -102,3 +102,7 @@ def test_default_beats_the_papers_table2_at_every_level(middlebury2):
     noise = report["methods"]["default"]["noise"]
     measured = {level: noise[level]["avg"]["nonocc"] for level in paper}
     assert all(measured[level] < paper[level] for level in paper), measured
+    # Today's figures (docs/noise.md: 4.80 / 7.97 / 15.48 / 21.64) plus 3 %: the paper's
+    # ceilings left 4-17 grey points of room.
+    ours = {"0.02": 4.80, "0.05": 7.97, "0.1": 15.48, "0.15": 21.64}
+    assert all(measured[level] <= 1.03 * ours[level] for level in ours), measured

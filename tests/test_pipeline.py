@@ -42,7 +42,7 @@ def test_synthetic_pair_is_matched_well():
     pair = synthetic.make_pair()
     disp = vsmatch.match(pair.left, pair.right, max_disp=pair.max_disp)
     bad = np.abs(disp - pair.disparity) > 1.0
-    assert bad[pair.nonocc].mean() < 0.02
+    assert bad[pair.nonocc].mean() < 0.001  # measured 0.02 %; a pipeline short of stages misses
 
 
 def test_synthetic_pair_ground_truth_is_consistent():
