@@ -190,7 +190,7 @@ def test_the_pair_list_is_never_an_output(tmp_path, rng):
     assert csv.read_bytes() == before
 
 
-def test_csv_outputs_are_checked_before_any_pair_runs(tmp_path, rng, monkeypatch):
+def test_csv_outputs_are_checked_before_any_pair_runs(tmp_path, rng, small_disk):
     """A missing output folder is made; a read-only one, or an output that is not .pfm or
     .png, is refused before any pair is matched (so no pair is matched in vain)."""
     write_pair(tmp_path, rng, "l.png", "r.png")
@@ -205,10 +205,9 @@ def test_csv_outputs_are_checked_before_any_pair_runs(tmp_path, rng, monkeypatch
     assert result.exit_code == 1 and "line 2" in result.output and ".pfm" in result.output
     assert not (tmp_path / "second.pfm").exists()
 
-    # As root every folder is writable, so the permission answer is simulated.
-    (tmp_path / "locked").mkdir()
-    monkeypatch.setattr("vsmatch.batch.writable", lambda folder: folder.name != "locked")
-    csv.write_text("l.png,r.png,second.pfm,8\nl.png,r.png,locked/d.pfm,8\n")
+    # The real permission check: a read-only mount refuses even root.
+    locked = small_disk(64, read_only=True)
+    csv.write_text(f"l.png,r.png,second.pfm,8\nl.png,r.png,{locked}/d.pfm,8\n")
     result = invoke("batch", csv)
     assert result.exit_code == 1 and "not writable" in result.output, result.output
     assert not (tmp_path / "second.pfm").exists()

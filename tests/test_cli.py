@@ -89,11 +89,12 @@ def test_run_errors_are_one_line_without_output(bad_inputs, monkeypatch, args, c
     assert set(bad_inputs.iterdir()) == before  # nothing written, no temporary left
 
 
-def test_unwritable_output_folder(pair_files, tmp_path, monkeypatch):
-    # As root every folder is writable, so the permission answer is simulated.
-    monkeypatch.setattr("vsmatch.cli.common.writable", lambda folder: False)
-    result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm")
-    assert result.exit_code == 1 and "is not writable" in result.output
+def test_unwritable_output_folder(pair_files, small_disk):
+    """The real permission check: a read-only mount refuses even root (no check patched)."""
+    disk = small_disk(64, read_only=True)
+    result = invoke("run", *pair_files, "-o", disk / "d.pfm")
+    assert result.exit_code == 1 and f"{disk}" in result.output
+    assert "is not writable" in result.output
 
 
 def test_truncated_image_error_is_one_line_in_a_real_process(bad_inputs):
