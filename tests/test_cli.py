@@ -33,11 +33,23 @@ def test_run_writes_the_disparity(pair_files, tmp_path, suffix):
 
 
 def test_run_with_a_config_file(pair_files, tmp_path):
+    """The file's values are the ones matched with: its output is the library's with that
+    config, to the byte, and not the default config's (a config silently ignored would pass
+    an exit-code check)."""
+    from vsmatch import pipeline
+    from vsmatch.config import load_config
+
     cfg = tmp_path / "c.yaml"
-    cfg.write_text("aggregation:\n  iterations: 2\n")
+    cfg.write_text("cost:\n  lambda_census: 2.0\narms:\n  l1: 3\n  l2: 5\n")
     result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm", "--max-disp", 8,
                     "--config", cfg)
     assert result.exit_code == 0, result.output
+    left, right = (io.read_image(p) for p in pair_files)
+    written = io.read_pfm(tmp_path / "d.pfm")
+    expected = pipeline.run(left, right, max_disp=8, config=load_config(str(cfg))).disparity
+    default = pipeline.run(left, right, max_disp=8).disparity
+    assert written.tobytes() == expected.tobytes()
+    assert written.tobytes() != default.tobytes()
 
 
 @pytest.fixture

@@ -46,7 +46,13 @@ def test_off_every_frame_is_matched_alone_and_on_the_first_is_too(adirondack, rn
         assert a.tobytes() == b.tobytes()
     assert on[0].tobytes() == alone[0].tobytes()
     assert reasons == ["first frame", None, None]
-    assert on[1].tobytes() != alone[1].tobytes()
+    # The later frames hold still: far fewer pixels move by more than 1 px from the frame
+    # before than when each frame is matched alone (the noise redraws every frame).
+    def moved(frames):
+        a, b = frames[1], frames[2]
+        both = np.isfinite(a) & np.isfinite(b)
+        return np.mean(np.abs(a - b)[both] > 1)
+    assert moved(on) < moved(alone) / 5, (moved(on), moved(alone))
 
 
 def test_a_still_scene_holds_still_and_stays_as_accurate(adirondack, rng):
