@@ -213,3 +213,52 @@ def test_frames_through_a_link_follow_it_and_a_link_to_nothing_is_refused(tmp_pa
     assert (tmp_path / "link").is_symlink()
     assert sorted(p.name for p in (tmp_path / "target").iterdir()) == [
         f"{k:06d}{s}.pfm" for k in range(2) for s in ("", "_confidence")]
+
+
+def decoded_frames(path):
+    capture = cv2.VideoCapture(str(path))
+    frames = []
+    while True:
+        ok, frame = capture.read()
+        if not ok:
+            return frames
+        frames.append(frame)
+
+
+def test_no_temporal_gives_each_frame_runs_bytes_and_the_video_shows_them(tmp_path, rng):
+    """--no-temporal matches every frame alone: its --frames are `vsmatch run`'s bytes on
+    the same decoded frames; and the video holds those frames, in order (decoded and
+    compared with their rendering, within what MJPG's compression changes)."""
+    from vsmatch import preview
+    from vsmatch.config import load_config
+
+    write_videos(tmp_path, rng, frames=3)
+    result = invoke("video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
+                    tmp_path / "d.avi", "--max-disp", 16, "--config", "fast", "--frames",
+                    tmp_path / "fr", "--no-temporal")
+    assert result.exit_code == 0, result.output
+    lefts, rights = (decoded_frames(tmp_path / f"{s}.avi") for s in ("left", "right"))
+    shown = decoded_frames(tmp_path / "d.avi")
+    assert len(lefts) == len(shown) == 3
+    threshold = load_config("fast").cloud.min_confidence
+    for k, (left, right) in enumerate(zip(lefts, rights)):
+        cv2.imwrite(str(tmp_path / "l.png"), left)
+        cv2.imwrite(str(tmp_path / "r.png"), right)
+        alone = invoke("run", tmp_path / "l.png", tmp_path / "r.png", "-o",
+                       tmp_path / f"run{k}.pfm", "--max-disp", 16, "--config", "fast",
+                       "--confidence", tmp_path / f"run{k}_c.pfm")
+        assert alone.exit_code == 0, alone.output
+        disp = io.read_pfm(tmp_path / "fr" / f"{k:06d}.pfm")
+        conf = io.read_pfm(tmp_path / "fr" / f"{k:06d}_confidence.pfm")
+        assert disp.tobytes() == io.read_pfm(tmp_path / f"run{k}.pfm").tobytes()
+        assert conf.tobytes() == io.read_pfm(tmp_path / f"run{k}_c.pfm").tobytes()
+        expected = preview.video_frame(disp, conf, threshold, 0, 16)
+        assert shown[k].shape == expected.shape
+        assert np.abs(shown[k].astype(int) - expected).mean() < 6  # MJPG's losses only
+    # Frames in their order: each decoded frame is nearest its own rendering.
+    renders = [preview.video_frame(io.read_pfm(tmp_path / "fr" / f"{k:06d}.pfm"),
+                                   io.read_pfm(tmp_path / "fr" / f"{k:06d}_confidence.pfm"),
+                                   threshold, 0, 16) for k in range(3)]
+    for k, frame in enumerate(shown):
+        errors = [np.abs(frame.astype(int) - r).mean() for r in renders]
+        assert errors[k] == min(errors), errors
