@@ -43,6 +43,10 @@ def test_kitti_calibration(tmp_path):
     assert calib.focal == pytest.approx(721.5377)
     assert calib.baseline == pytest.approx((44.85728 + 339.5242) / 721.5377)  # ~0.53 m
     assert calib.doffs == 0.0 and calib.ndisp is None
+    assert (calib.cx, calib.cy, calib.focal_y) == pytest.approx((609.5593, 172.854, 721.5377))
+    # Depth in metres: a disparity of 10 px lies f B / 10 = 38.4 m away.
+    depth = geometry.depth_from_disparity(np.full((1, 1), 10.0, np.float32), calib)
+    assert depth[0, 0] == pytest.approx(721.5377 * calib.baseline / 10, rel=1e-6)
 
 
 @pytest.mark.parametrize("text,message", [

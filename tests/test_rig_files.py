@@ -205,3 +205,47 @@ def test_json_rigs_are_read_and_unknown_files_name_the_formats(tmp_path, data_di
     (tmp_path / "other.json").write_text('{"a": 1}')
     with pytest.raises(CalibrationError, match="nor a raw rig \\(OpenCV stereoCalibrate"):
         read_calibration(tmp_path / "other.json")
+
+
+@pytest.mark.parametrize("kind", ["opencv", "kalibr", "ros"])
+def test_each_rig_reader_gives_the_rectified_camera_in_its_own_unit(tmp_path, kind):
+    """Each reader's rectified camera, value by value (not the baseline alone): f 300 px and
+    the principal point (80, 48) of these rigs, doffs 0 (same cameras, no rotation), the
+    baseline in the file's unit (OpenCV's T in mm, Kalibr's and ROS's in m), so a disparity
+    of 6 px lies 3000 mm or 3 m away."""
+    from vsmatch import geometry
+
+    if kind == "opencv":
+        paths, unit_baseline = [write_opencv_rig(tmp_path / "rig.yaml")], 60.0
+    elif kind == "kalibr":
+        (tmp_path / "camchain.yaml").write_text(yaml.safe_dump(kalibr_rig()))
+        paths, unit_baseline = [tmp_path / "camchain.yaml"], 0.06
+    else:
+        paths, unit_baseline = ros_pair(tmp_path), 0.06
+    camera = rig.Rectifier(rig.read_rig(paths), (WIDTH, HEIGHT)).calibration()
+    assert camera.focal == pytest.approx(300, abs=1e-3)
+    assert camera.focal_y == pytest.approx(300, abs=1e-3)
+    assert (camera.cx, camera.cy) == pytest.approx((80, 48), abs=1e-3)
+    assert camera.doffs == pytest.approx(0, abs=1e-6)
+    assert camera.baseline == pytest.approx(unit_baseline, rel=1e-9)
+    depth = geometry.depth_from_disparity(np.full((2, 2), 6.0, np.float32), camera)
+    assert depth == pytest.approx(np.full((2, 2), 300 * unit_baseline / 6), rel=1e-6)
+
+
+def test_alpha_keeps_more_of_a_distorted_view_at_a_smaller_focal_length(tmp_path):
+    """--alpha 1 keeps every source pixel of a barrel-distorted view: a smaller focal
+    length than alpha 0 (which crops to valid pixels), the same baseline."""
+    barrel = np.array([[-0.3, 0.1, 0, 0, 0]])
+    raw = rig.read_rig([write_opencv_rig(tmp_path / "rig.yaml", D1=barrel, D2=barrel)])
+    cropped = rig.Rectifier(raw, (WIDTH, HEIGHT), 0.0).calibration()
+    whole = rig.Rectifier(raw, (WIDTH, HEIGHT), 1.0).calibration()
+    assert whole.focal < cropped.focal < 300.5
+    assert whole.baseline == pytest.approx(cropped.baseline)
+
+
+def test_a_rig_whose_cameras_are_swapped_is_named(tmp_path):
+    """T pointing the other way (the left camera's file given as the right's): after
+    rectifying, the right camera lies left of the left one; said, not matched."""
+    raw = rig.read_rig([write_opencv_rig(tmp_path / "rig.yaml", T=np.array([[60.0], [0], [0]]))])
+    with pytest.raises(CalibrationError, match="are the cameras swapped"):
+        rig.Rectifier(raw, (WIDTH, HEIGHT)).calibration()
