@@ -113,6 +113,28 @@ def test_a_cut_searches_the_whole_range_again(data_dir, rng):
     assert out[2].tobytes() == alone.tobytes()
 
 
+def test_an_exposure_jump_and_new_views_search_the_whole_range(rng):
+    """The refreshes no test fired: a jump of exposure in both views (a flat histogram, so
+    it is no cut) searches the whole range and matches that frame as alone; views of another
+    size, then of other channels, start a new stream each."""
+    from conftest import random_pair
+
+    left, right = random_pair(rng, height=96, width=160, shift=5)
+
+    def brighter(view):
+        return np.clip(view.astype(np.int16) + 11, 0, 255).astype(np.uint8)
+
+    lit = (brighter(left), brighter(right))
+    cropped = tuple(np.ascontiguousarray(v[:, :150]) for v in lit)
+    grey = tuple(np.ascontiguousarray(v[:, :, 1]) for v in cropped)
+    clip = [(left, right), (left, right), lit, lit, cropped, grey]
+    out, reasons = stream(clip, 16)
+    assert reasons == ["first frame", None, "exposure", None,
+                       "new size, channels or range", "new size, channels or range"]
+    assert out[2].tobytes() == vsmatch.match(*lit, max_disp=16).tobytes()
+    assert out[5].tobytes() == vsmatch.match(*grey, max_disp=16).tobytes()
+
+
 def test_every_so_many_frames_the_whole_range_is_searched(adirondack, rng):
     s = adirondack
     cfg = vsmatch.load_config(None)
