@@ -191,5 +191,6 @@ def test_the_progress_counts_every_step_of_the_benchmark(data_dir, monkeypatch):
     monkeypatch.setattr(bench, "memory", lambda *a: {})
     monkeypatch.setattr(bench, "cold_start", lambda *a: {})
     monkeypatch.setattr(bench, "size_run", lambda *a, **k: {})
-    bench.run_benchmark(data_dir, ["fast"], 1, on_done=calls.append)
-    assert len(calls) == bench.steps(data_dir) > len(bench.standard_pairs(data_dir))
+    totals = []
+    bench.run_benchmark(data_dir, ["fast"], 1, on_done=calls.append, on_total=totals.append)
+    assert totals == [len(calls)] and len(calls) > len(bench.standard_pairs(data_dir))

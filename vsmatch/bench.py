@@ -368,13 +368,19 @@ def _child_size(argv: list[str]) -> None:
 
 def run_benchmark(data_root=None, configs=BENCH_CONFIGS, rounds: int = 5,
                   cold: bool = True, size: bool = True, threads=None,
-                  on_done: Callable[[str], None] | None = None) -> dict[str, Any]:
+                  on_done: Callable[[str], None] | None = None,
+                  on_total: Callable[[int], None] | None = None) -> dict[str, Any]:
     """Everything :mod:`vsmatch.bench` measures, as one JSON-ready dict. Start-up,
     the whole command and memory are measured for the first config; ``threads``: the
     thread counts the standard pairs are timed at (:func:`time_pairs`); ``on_done(name)``
-    after each pair and each step after them (progress: :func:`steps` of them in all)."""
+    after each pair and each step after them, ``on_total(count)`` once before the work
+    with how many there will be (progress)."""
     import numba
 
+    pairs = standard_pairs(data_root)
+    sized = [entry for entry in SIZE_SERIES if _has_scene(data_root, entry)] if size else []
+    if on_total is not None:  # the pairs, command and memory, start-up, sizes and the tall
+        on_total(len(pairs) + 1 + cold + (len(sized) + 1 if size else 0))
     configs = list(configs)
     first = configs[0]
     folder = datasets.dataset_folder("middlebury2", data_root) / "cones"
@@ -383,8 +389,7 @@ def run_benchmark(data_root=None, configs=BENCH_CONFIGS, rounds: int = 5,
     report: dict[str, Any] = {
         "configs": configs,
         "threads": {"numba": numba.get_num_threads(), "opencv": cv2.getNumThreads()},
-        "pairs": time_pairs(standard_pairs(data_root), configs, rounds, threads=threads,
-                            on_done=on_done),
+        "pairs": time_pairs(pairs, configs, rounds, threads=threads, on_done=on_done),
         "run_command_cones": run_command(left, right, cones_disp, first, 3),
         "memory_cones": memory(left, right, cones_disp, first)}
     done = on_done or (lambda name: None)
@@ -394,9 +399,7 @@ def run_benchmark(data_root=None, configs=BENCH_CONFIGS, rounds: int = 5,
         done("start-up")
     if size:
         runs = []
-        for entry in SIZE_SERIES:
-            if not _has_scene(data_root, entry):
-                continue  # e.g. no KITTI on this machine
+        for entry in sized:  # those this machine has (e.g. no KITTI)
             runs += [size_run(data_root, "vsmatch", entry, c) for c in configs]
             runs += [size_run(data_root, peer, entry) for peer in SIZE_PEERS]
             done(f"size {entry[0]}")
@@ -404,14 +407,6 @@ def run_benchmark(data_root=None, configs=BENCH_CONFIGS, rounds: int = 5,
         done("size 4x twice as tall")
         report["size"] = runs
     return report
-
-
-def steps(data_root=None, cold: bool = True, size: bool = True) -> int:
-    """How many times :func:`run_benchmark` calls its ``on_done``."""
-    count = len(standard_pairs(data_root)) + 1 + cold
-    if size:
-        count += 1 + sum(1 for entry in SIZE_SERIES if _has_scene(data_root, entry))
-    return count
 
 
 def _has_scene(data_root, entry) -> bool:

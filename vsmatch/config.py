@@ -8,9 +8,9 @@ with a one-line :class:`ConfigError` that names the key.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
 import functools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path

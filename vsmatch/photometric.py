@@ -18,8 +18,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ._kernels.photometric import (corrected_colours, map_colours, matched_colours,
-                                   matched_count)
+from ._kernels.photometric import corrected_colours, map_colours, matched_colours
 from .config import PhotometricConfig
 from .images import as_channels
 from .noise import estimate_noise
@@ -103,15 +102,12 @@ def _matched_colours(left: np.ndarray, right: np.ndarray, disp: np.ndarray,
     left, right = as_channels(left), as_channels(right)
     matched = np.ascontiguousarray(matched)
     disp = np.ascontiguousarray(disp, dtype=np.float32)
-    per_row = np.empty(left.shape[0], np.int64)
-    matched_count(matched, disp, per_row)
-    first = np.concatenate(([0], np.cumsum(per_row)))
-    total = int(first[-1])
-    ys, xr = np.empty(total, np.int64), np.empty(total, np.int64)
-    at_left = np.empty((total, left.shape[2]), np.uint8)
+    room = int(np.count_nonzero(matched))
+    ys, xr = np.empty(room, np.int64), np.empty(room, np.int64)
+    at_left = np.empty((room, left.shape[2]), np.uint8)
     at_right = np.empty_like(at_left)
-    matched_colours(left, right, matched, disp, first, ys, xr, at_left, at_right)
-    return ys, xr, at_left, at_right
+    n = matched_colours(left, right, matched, disp, ys, xr, at_left, at_right)
+    return ys[:n], xr[:n], at_left[:n], at_right[:n]
 
 
 def difference_field(at_left: np.ndarray, mapped: np.ndarray, ys: np.ndarray,

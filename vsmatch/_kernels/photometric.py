@@ -36,24 +36,13 @@ def box_mean(volume, box, rows_at, columns_at, out):
 
 
 @njit(**SERIAL_OPTIONS)
-def matched_count(matched, disp, per_row):
-    """Per row, the ``matched`` left pixels whose right pixel x - round(d) is in view."""
-    height, width = matched.shape
-    for y in range(height):
-        n = 0
-        for x in range(width):
-            if matched[y, x] and x - np.int64(np.rint(disp[y, x])) >= 0:
-                n += 1
-        per_row[y] = n
-
-
-@njit(**SERIAL_OPTIONS)
-def matched_colours(left, right, matched, disp, first, ys, xr, at_left, at_right):
-    """The rows, right columns and colours (left and right) of the pixels
-    :func:`matched_count` counts, in row-major order, row y's from ``first[y]`` on."""
+def matched_colours(left, right, matched, disp, ys, xr, at_left, at_right):
+    """The rows, right columns and colours (left and right) of the ``matched`` left pixels
+    whose right pixel x - round(d) is in view, in row-major order; returns how many (the
+    outputs hold room for every matched pixel)."""
     height, width, channels = left.shape
+    i = 0
     for y in range(height):
-        i = first[y]
         for x in range(width):
             if not matched[y, x]:
                 continue
@@ -66,6 +55,7 @@ def matched_colours(left, right, matched, disp, first, ys, xr, at_left, at_right
                 at_left[i, c] = left[y, x, c]
                 at_right[i, c] = right[y, x_r, c]
             i += 1
+    return i
 
 
 @njit(**SERIAL_OPTIONS)

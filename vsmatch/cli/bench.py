@@ -78,14 +78,18 @@ def bench_command(ctx, data_root, configs, rounds, no_cold, no_size, threads, js
 
     quiet = ctx.find_root().obj.get("quiet")
     # Several minutes in all: a bar in a terminal (None: none in a log file).
-    with tqdm(total=bench.steps(data_root, not no_cold, not no_size),
-              disable=True if quiet else None, unit="step", leave=False) as bar:
+    with tqdm(disable=True if quiet else None, unit="step", leave=False) as bar:
         def done(name: str) -> None:
             bar.set_postfix_str(name)
             bar.update(1)
 
+        def total(count: int) -> None:
+            bar.total = count
+            bar.refresh()
+
         report = bench.run_benchmark(data_root, configs, rounds, cold=not no_cold,
-                                     size=not no_size, threads=counts, on_done=done)
+                                     size=not no_size, threads=counts, on_done=done,
+                                     on_total=total)
     echo(ctx, bench.format_report(report))
     if json_path is not None:
         io.write_text_atomic(json_path, json.dumps(report, indent=2) + "\n")

@@ -15,6 +15,7 @@ import click
 from .. import batch, datasets, io
 from ..config import ConfigError, bundled_config_names, config_from_dict
 from ..executors import ExecutorError
+from .console import TERMINATING
 
 EXPECTED_ERRORS = (ConfigError, io.ImageError, datasets.DatasetError, batch.BatchError,
                    ExecutorError, ValueError, OSError)
@@ -30,14 +31,6 @@ EXIT_BROKEN_PIPE = 141
 def examples(*lines: str) -> str:
     """A command's epilog: the lines kept as written (Click's ``\\b``), under "Examples"."""
     return "\b\nExamples:\n" + "\n".join(f"  {line}" for line in lines)
-
-
-#: The signals that stop a program besides Ctrl-C, each handled as SIGTERM is (its
-#: temporaries removed, one line, exit 128 + its number): a kill, a closed terminal or SSH
-#: session (SIGHUP), Ctrl-backslash (SIGQUIT). Their lines.
-TERMINATING = {getattr(signal, name): said for name, said in (
-    ("SIGTERM", "terminated"), ("SIGHUP", "hung up (the terminal closed)"),
-    ("SIGQUIT", "quit")) if hasattr(signal, name)}
 
 
 class Terminated(KeyboardInterrupt):
@@ -410,6 +403,16 @@ def check_png_range(path, min_disp: int, max_disp: int) -> None:
     problem = io.png_range_problem(path, min_disp, max_disp)
     if problem is not None:
         raise click.ClickException(problem)
+
+
+def remove_left_overs(ctx: click.Context, paths) -> None:
+    """Remove, naming each on stderr, what writes of ``paths`` left when their run was
+    killed (SIGKILL: nothing could clean up); None entries are skipped."""
+    for path in paths:
+        if path is not None:
+            for left_over in io.remove_stale_temporaries(path):
+                echo(ctx, f"removed {left_over}, left by an earlier run that was killed",
+                     err=True)
 
 
 def announce_compilation(ctx: click.Context) -> None:

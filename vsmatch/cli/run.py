@@ -11,7 +11,8 @@ from .. import confidence, geometry, io, pipeline, preview, rig, search_range
 from ..config import load_config
 from .common import (ALPHA, CONFIDENCE_LEVEL, FINITE, MAX_DISP, POSITIVE, announce_compilation,
                      check_outputs, check_png_range, config_option, echo, examples, given,
-                     friendly_errors, max_memory_option, verbose, verbosity_options, with_budget)
+                     friendly_errors, max_memory_option, remove_left_overs, verbose,
+                     verbosity_options, with_budget)
 
 from .main import main
 
@@ -162,11 +163,7 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
     announce_compilation(ctx)
     result = pipeline.run(left_image, right_image, max_disp=max_disp, min_disp=min_disp,
                           config=cfg)
-    for path in outputs:
-        if path is not None:
-            for left_over in io.remove_stale_temporaries(path):
-                echo(ctx, f"removed {left_over}, left by an earlier run that was killed",
-                     err=True)
+    remove_left_overs(ctx, outputs)
     disp = result.disparity
     if min_confidence is not None:  # every output, the disparity too
         disp = confidence.keep_confident(disp, result.confidence, min_confidence)

@@ -14,7 +14,7 @@ from .. import confidence, frames, geometry, io, preview
 from ..matcher import StereoMatcher
 from ..search_range import PairGeometryError, RangeError
 from .common import (MAX_DISP, check_outputs, config_option, echo, examples,
-                     friendly_errors, verbose, verbosity_options)
+                     friendly_errors, remove_left_overs, verbose, verbosity_options)
 
 from .main import main
 
@@ -117,11 +117,7 @@ def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_p
         except OSError as exc:
             raise click.ClickException(str(exc)) from None
     # What an earlier run of these outputs left when it was killed (SIGKILL) goes now.
-    for path in [out, *folders.values()]:
-        for left_over in io.remove_stale_temporaries(
-                io.followed_folder(path) if path != out else path):
-            echo(ctx, f"removed {left_over}, left by an earlier run that was killed",
-                 err=True)
+    remove_left_overs(ctx, [out, *(io.followed_folder(f) for f in folders.values())])
     folder_pairs = len(names) == 2 and all(Path(name).is_dir() for name in names)
     if folder_pairs:
         pairs = frames.FolderPairs(*names)
