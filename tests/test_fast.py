@@ -1,6 +1,6 @@
 """The bundled ``fast`` config (issue 21): coarse-to-fine at every size, and at most 0.6x
-SGBM's errors on every dataset, run through the real pipeline on the real data. The
-thresholds lock in what was measured (docs/performance.md) with a small margin."""
+SGBM's errors on every dataset, run through the real pipeline on the real data, and
+within today's figures plus a small margin (tests/figures.yaml)."""
 
 import numpy as np
 import pytest
@@ -9,12 +9,11 @@ from vsmatch import datasets, evaluation, pipeline, pyramid
 from vsmatch.config import load_config
 
 from conftest import standard_scenes
+from figures import hold
 
-#: Measured with the fast config (headline: nonocc, KITTI all; README's table, 2026-11-27),
-#: and the ceiling we hold: the figure plus 3 % (the bytes are the same at any thread count;
-#: the margin is for other machines' rounding only).
-MEASURED = {"middlebury2": (3.99, 4.11), "middlebury-third": (8.31, 8.56),
-            "middlebury2014-quarter": (10.40, 10.71), "kitti2015": (6.34, 6.53)}
+#: The datasets and their keys in tests/figures.yaml (headline: nonocc, KITTI all).
+FIGURES = {"middlebury2": "middlebury2/fast", "middlebury-third": "middlebury-third/fast",
+           "middlebury2014-quarter": "middlebury2014/fast", "kitti2015": "kitti2015/fast"}
 
 
 def test_min_levels_halves_at_least_that_often():
@@ -43,7 +42,7 @@ def test_fast_is_bundled_and_searches_one_level_down(rng):
 
 
 @pytest.mark.data
-@pytest.mark.parametrize("dataset", list(MEASURED))
+@pytest.mark.parametrize("dataset", list(FIGURES))
 def test_fast_has_at_most_six_tenths_of_sgbms_errors(data_dir, dataset):
     scenes = standard_scenes(datasets.load_dataset(dataset, data_dir))
     report = evaluation.evaluate(scenes, {"fast": "fast", "sgbm": "opencv-sgbm"},
@@ -51,6 +50,5 @@ def test_fast_has_at_most_six_tenths_of_sgbms_errors(data_dir, dataset):
     mask = "all" if dataset.startswith("kitti") else "nonocc"
     fast = report["methods"]["fast"]["avg"][mask]
     sgbm = report["methods"]["sgbm"]["avg"][mask]
-    measured, ceiling = MEASURED[dataset]
-    assert fast <= ceiling, (fast, measured)
+    hold(FIGURES[dataset], fast)
     assert fast <= 0.6 * sgbm, (fast, sgbm)

@@ -14,6 +14,8 @@ from vsmatch.cli import main
 from vsmatch.geometry import CalibrationError
 from vsmatch.search_range import feature_matches
 
+from figures import hold
+
 
 def invoke(*args):
     return CliRunner().invoke(main, [str(a) for a in args])
@@ -159,15 +161,16 @@ def cloud_errors(points, calib, truth):
 def test_the_cloud_of_a_raw_rig_is_as_right_as_the_rectified_originals(data_dir, tmp_path,
                                                                         name):
     """The issue's check: brought back to the scene's frame, the raw rig's cloud has at
-    most 6 points more wrong (> 3 % off in depth) than the original's, and at least 85 %
-    as many points. ArtL's rectified rig reaches below zero (-40..52): its last columns
-    were cut from the match until issue 21 (0.80 as many points then, 0.94 now)."""
+    most 2 points more wrong (> 3 % off in depth; and at most today's share, in
+    tests/figures.yaml) than the original's, and at least 85 % as many points. ArtL's
+    rectified rig reaches below zero (-40..52): its last columns were cut from the match
+    until issue 21 (0.80 as many points then, 0.94 now)."""
     folder = datasets.dataset_folder("middlebury2014-quarter", data_dir)
     found = datasets.load_dataset("middlebury2014-quarter", data_dir, names=[name])[0]
     calib = geometry.read_calibration(folder / name / "calib.txt")
     (left, right), m = raw_views(found, calib)
-    for name, view in (("raw_l.png", left), ("raw_r.png", right)):
-        cv2.imwrite(str(tmp_path / name), view)
+    for file, view in (("raw_l.png", left), ("raw_r.png", right)):
+        cv2.imwrite(str(tmp_path / file), view)
     cv2.imwrite(str(tmp_path / "im0.png"), found.left)
     cv2.imwrite(str(tmp_path / "im1.png"), found.right)
     write_opencv(tmp_path / "stereo.yaml", m)
@@ -195,7 +198,8 @@ def test_the_cloud_of_a_raw_rig_is_as_right_as_the_rectified_originals(data_dir,
     wrong_raw, count_raw = cloud_errors(raw_points, calib, found.ground_truth)
     wrong_original, count_original = cloud_errors(points(tmp_path / "o.ply"), calib,
                                                   found.ground_truth)
-    assert wrong_raw <= wrong_original + 0.06
+    hold(f"rig/raw-cloud-wrong/{name}", 100 * wrong_raw)  # % of its points
+    assert wrong_raw <= wrong_original + 0.02
     assert count_raw >= 0.85 * count_original
 
 
