@@ -76,25 +76,52 @@ def lowest_cloud_threshold() -> float:
     return min(load_config(name).cloud.min_confidence for name in bundled_config_names())
 
 
+def no_way_to(what: str):
+    """Fail in CI (a check that cannot run there is a hole in it), skip elsewhere."""
+    if os.environ.get("CI") == "true":
+        pytest.fail(f"cannot {what} here: in CI this test must run")
+    pytest.skip(f"cannot {what} here")
+
+
 @pytest.fixture
 def small_disk(tmp_path):
-    """``small_disk(kilobytes, read_only=False)``: a folder on a tmpfs that small (a disk
-    that fills up; or mounted read-only), unmounted after the test; skips where tmpfs
-    cannot be mounted."""
+    """``small_disk(kilobytes, read_only=False, mount=True, whole_disk=False)``: a folder
+    that fills up past that size, or that cannot be written. A tmpfs that small is mounted
+    (read-only if asked) and unmounted after the test; where mounting is not allowed (or
+    ``mount=False``), a full disk is a file-size limit instead (RLIMIT_FSIZE: a write past
+    it fails, EFBIG, as a full disk's does, ENOSPC; the limit holds for every file the test
+    writes from then on; so not for a test that fills the ``whole_disk``, with many small
+    files or a filler), and a read-only folder is one without write permission (for a user
+    other than root). Neither possible: the test fails in CI and skips elsewhere."""
+    import resource
+    import signal
     import subprocess
 
-    mounted = []
+    undo = []
 
-    def mount(kilobytes: int, read_only: bool = False):
-        disk = tmp_path / f"disk{len(mounted)}"
-        disk.mkdir()
+    def disk(kilobytes: int, read_only: bool = False, mount: bool = True,
+             whole_disk: bool = False):
+        folder = tmp_path / f"disk{len(undo)}"
+        folder.mkdir()
         options = ("ro," if read_only else "") + f"size={kilobytes}k"
-        if subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs",
-                           str(disk)], capture_output=True).returncode != 0:
-            pytest.skip("cannot mount a small tmpfs here")
-        mounted.append(disk)
-        return disk
+        if mount and subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs",
+                                     str(folder)], capture_output=True).returncode == 0:
+            undo.append(lambda: subprocess.run(["umount", str(folder)], capture_output=True))
+        elif read_only and os.geteuid() != 0:
+            folder.chmod(0o555)
+            undo.append(lambda: folder.chmod(0o755))
+        elif not read_only and not whole_disk:
+            limits = resource.getrlimit(resource.RLIMIT_FSIZE)
+            handler = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # EFBIG, not a kill
+            resource.setrlimit(resource.RLIMIT_FSIZE, (kilobytes * 1024, limits[1]))
+            undo.append(lambda: (resource.setrlimit(resource.RLIMIT_FSIZE, limits),
+                                 signal.signal(signal.SIGXFSZ, handler)))
+        elif read_only:
+            no_way_to("mount a read-only tmpfs or drop write permission (root)")
+        else:
+            no_way_to("mount a small tmpfs (a file-size limit cannot fill a whole disk)")
+        return folder
 
-    yield mount
-    for disk in mounted:
-        subprocess.run(["umount", str(disk)], capture_output=True)
+    yield disk
+    for step in reversed(undo):
+        step()

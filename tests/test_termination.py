@@ -5,6 +5,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import cv2
 import pytest
@@ -63,6 +64,27 @@ def test_sigterm_removes_temporaries_and_exits_143(pair_files, tmp_path):
     assert files_in(tmp_path) == ["l.png", "r.png"]
 
 
+def descendants(pid: int) -> list[int]:
+    """A process's children, theirs and so on, from Linux's /proc (no psutil needed)."""
+    found = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        try:
+            children = (task / "children").read_text().split()
+        except OSError:  # the task ended meanwhile
+            continue
+        for child in map(int, children):
+            found += [child, *descendants(child)]
+    return found
+
+
+def running(pid: int) -> bool:
+    """Alive and not a zombie waiting for its parent."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
 def test_sigterm_ends_a_parallel_batch_and_its_workers(tmp_path, rng):
     import os
     import signal
@@ -70,7 +92,6 @@ def test_sigterm_ends_a_parallel_batch_and_its_workers(tmp_path, rng):
     import sys
     import time
 
-    psutil = pytest.importorskip("psutil")
     for k in range(6):
         left, right = shifted_pair(rng, 20, height=400, width=600)
         cv2.imwrite(str(tmp_path / f"p{k}_left.png"), left)
@@ -78,18 +99,19 @@ def test_sigterm_ends_a_parallel_batch_and_its_workers(tmp_path, rng):
     proc = subprocess.Popen([sys.executable, "-m", "vsmatch", "batch", str(tmp_path), "-o",
                              str(tmp_path / "out"), "--jobs", "2", "--max-disp", "200",
                              "--config", "default"], stderr=subprocess.PIPE, text=True)
-    parent = psutil.Process(proc.pid)
     deadline = time.time() + 120
-    while time.time() < deadline and len(parent.children(recursive=True)) < 3:
+    while time.time() < deadline and len(descendants(proc.pid)) < 3:
         time.sleep(0.2)  # the resource tracker and two workers
-    children = parent.children(recursive=True)
+    children = descendants(proc.pid)
     assert len(children) >= 3
     time.sleep(2)  # the workers busy matching
     os.kill(proc.pid, signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143, err
-    gone, alive = psutil.wait_procs(children, timeout=15)
-    assert not alive, [p.cmdline() for p in alive]
+    deadline = time.time() + 15
+    while time.time() < deadline and any(map(running, children)):
+        time.sleep(0.2)
+    assert not any(map(running, children)), [p for p in children if running(p)]
     leftovers = [p.name for p in (tmp_path / "out").iterdir() if ".tmp" in p.name]
     assert leftovers == []
 

@@ -133,7 +133,7 @@ def test_overwrite_never_deletes_what_vsmatch_did_not_write(tmp_path, rng, monke
 def test_a_full_frames_folder_is_named_by_its_own_path(tmp_path, rng, small_disk):
     """A write that fails inside the staged --frames folder names the folder the user
     gave, never its temporary, in one line (no libpng line beside it)."""
-    disk = small_disk(64)
+    disk = small_disk(64, whole_disk=True)
     write_videos(tmp_path, rng)
     result = invoke("video", tmp_path / "left.avi", tmp_path / "right.avi", "-o",
                     tmp_path / "d.avi", "--frames", disk / "fr", "--max-disp", 16)
