@@ -32,6 +32,18 @@ def data_dir() -> Path:
     return root
 
 
+@pytest.fixture(scope="session", autouse=True)
+def warm_kernels():
+    """Compile the kernels before the first test when Numba's cache is cold: else the first
+    test that runs a match (whichever it is) also prints "compiling the kernels once", and a
+    test counting a refusal's lines fails only on a fresh cache."""
+    from vsmatch import _kernels, pipeline
+
+    if _kernels.cache_is_cold():
+        left, right = random_pair(np.random.default_rng(0), height=32, width=48, shift=3)
+        pipeline.run(left, right, max_disp=8)
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(0)
