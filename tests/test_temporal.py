@@ -209,6 +209,40 @@ def test_every_so_many_frames_the_whole_range_is_searched(adirondack, rng):
     assert reasons == ["first frame", None, None, "refresh", None]
 
 
+def test_a_collapse_of_confidence_searches_the_whole_range(adirondack, rng):
+    """The last refresh no test fired: a frame whose views each turned to noise in 28 % of
+    their columns (the left view's right end, the right view's left end: the same grey
+    levels, so no cut; less than scene_change of either view, so not a new scene) loses
+    confidence (measured: mean 0.751 near the last frame against the full search's 0.798).
+    At a collapse share above that drop the frame is searched whole, matched as alone;
+    below it, searched near the last frame."""
+    import dataclasses
+
+    s = adirondack
+    left, right = s.left[:200], s.right[:200]
+    width = left.shape[1]
+    part = int(0.28 * width)
+
+    def shuffled(view, columns):
+        out = view.copy()
+        block = out[:, columns]
+        out[:, columns] = rng.permutation(block.reshape(-1, 3)).reshape(block.shape)
+        return out
+
+    clip = [(noisy(left, rng), noisy(right, rng)) for _ in range(2)]
+    clip.append((shuffled(noisy(left, rng), slice(width - part, width)),
+                 shuffled(noisy(right, rng), slice(0, part))))
+    base, third = vsmatch.load_config(None), {}
+    for collapse, reason in ((0.97, "confidence collapsed"), (0.9, None)):
+        cfg = dataclasses.replace(base, temporal=dataclasses.replace(base.temporal,
+                                                                     collapse=collapse))
+        out, reasons = stream(clip, s.max_disp, config=cfg)
+        assert reasons == ["first frame", None, reason], collapse
+        third[reason] = out[2].tobytes()
+    alone = vsmatch.match(*clip[2], max_disp=s.max_disp).tobytes()
+    assert third["confidence collapsed"] == alone and third[None] != alone
+
+
 @pytest.mark.parametrize("dy, dx", [(0, 0), (-1, -3), (2, 5)])
 def test_the_image_shift_is_found(adirondack, dy, dx):
     grey = to_grey(adirondack.left)
