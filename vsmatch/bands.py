@@ -36,6 +36,15 @@ class Bands:
     def is_full(self) -> bool:
         return self.width == self.n_disp and not self.lo.any()
 
+    def placed(self, first: int, height: int) -> "Bands":
+        """These bands of rows ``first ..`` placed in views ``height`` rows high: no
+        candidates in the other rows."""
+        lo = np.zeros((height, self.lo.shape[1]), np.int32)
+        count = np.zeros_like(lo)
+        stop = first + self.lo.shape[0]
+        lo[first:stop], count[first:stop] = self.lo, self.count
+        return Bands(lo, count, self.width, self.n_disp)
+
     def rows(self, first: int, stop: int) -> "Bands":
         """The bands of rows ``first .. stop - 1``."""
         return Bands(np.ascontiguousarray(self.lo[first:stop]),

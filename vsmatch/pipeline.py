@@ -16,7 +16,8 @@ from . import temporal as video
 from .checks import check_pair, check_views  # noqa: F401  (the inputs' checks, re-exported)
 from .config import Config, load_config
 from .forking import check_not_forked
-from .images import to_grey
+from .bands import Bands
+from .images import downsample, to_grey
 from .level import solve
 from .result import Learnt, MatchResult, learn, timed
 from .temporal import Temporal
@@ -124,6 +125,10 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int,
     # which a jump in exposure or a refresh searches again for (2.7 ms a frame at 640x480).
     learnt = Learnt(noise_sigma=memory.noise_sigma, width=left.shape[1],
                     colour_weight=memory.colour_weight)
+    if near.look is not None:
+        with timed(seconds, "coarse look"):
+            near = video.looked_again(near, _coarse_bands(left, right, max_disp, cfg, learnt,
+                                                          near.look))
     result = scale.in_stripes(functools.partial(solve, learnt=learnt), left, right, max_disp,
                               cfg, near.bands)
     result.seconds = {**seconds, **result.seconds}
@@ -132,6 +137,20 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int,
     _fit_planes(result, left, max_disp)
     result.disparity = video.hold(near, result.disparity, cfg.temporal)
     return _with_confidence(result, left, max_disp)
+
+
+def _coarse_bands(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
+                  learnt: Learnt, rows: tuple[int, int]) -> Bands:
+    """Bands over ``rows`` (first, stop; none elsewhere) around a search of the whole range
+    one pyramid level down (an eighth of the full search's cells a row)."""
+    first, stop = rows[0] - rows[0] % 2, rows[1]  # whole rows of the level down
+    _, coarse_max = pyramid.level_down(left.shape[1], max_disp)
+    coarse = scale.in_stripes(functools.partial(solve, learnt=learnt),
+                              downsample(left[first:stop]), downsample(right[first:stop]),
+                              coarse_max, cfg)
+    bands = pyramid.bands_from_coarse(coarse.disparity, coarse.labels, (stop - first,
+                                      left.shape[1]), max_disp, cfg.bands)
+    return bands.placed(first, left.shape[0])
 
 
 def _learn(left: np.ndarray, right: np.ndarray, cfg: Config, colour_weight: float,
