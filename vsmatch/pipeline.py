@@ -17,7 +17,7 @@ from .checks import check_pair, check_views  # noqa: F401  (the inputs' checks, 
 from .config import Config, load_config
 from .forking import check_not_forked
 from .bands import Bands
-from .images import downsample, to_grey
+from .images import downsample, to_grey, upsample_nearest
 from .level import solve
 from .result import Learnt, MatchResult, learn, timed
 from .temporal import Temporal
@@ -125,32 +125,42 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int,
     # which a jump in exposure or a refresh searches again for (2.7 ms a frame at 640x480).
     learnt = Learnt(noise_sigma=memory.noise_sigma, width=left.shape[1],
                     colour_weight=memory.colour_weight)
+    looked = None
     if near.look is not None:
         with timed(seconds, "coarse look"):
-            near = video.looked_again(near, _coarse_bands(left, right, max_disp, cfg, learnt,
-                                                          near.look))
+            looked = _coarse_look(left, right, max_disp, cfg, learnt, near.look)
+            near = video.looked_again(near, looked[0])
     result = scale.in_stripes(functools.partial(solve, learnt=learnt), left, right, max_disp,
                               cfg, near.bands)
     result.seconds = {**seconds, **result.seconds}
     result.photometric = memory.correction
-    result.curve = memory.curve  # the last full search's (a band's curve is short)
+    # The last full search's cost-curve features (a band's curve is short); where the
+    # coarse look searched a moved pixel's whole range, that curve's (what it shows now).
+    result.curve = memory.curve
+    if looked is not None and looked[1] is not None:
+        result.curve = video.looked_curve(memory.curve, looked[1], near.look[0], near.moved)
     _fit_planes(result, left, max_disp)
     result.disparity = video.hold(near, result.disparity, cfg.temporal)
     return _with_confidence(result, left, max_disp)
 
 
-def _coarse_bands(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
-                  learnt: Learnt, rows: tuple[int, int]) -> Bands:
-    """Bands over ``rows`` (first, stop; none elsewhere) around a search of the whole range
-    one pyramid level down (an eighth of the full search's cells a row)."""
-    first, stop = rows[0] - rows[0] % 2, rows[1]  # whole rows of the level down
+def _coarse_look(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
+                 learnt: Learnt, rows: tuple[int, int]
+                 ) -> tuple[Bands, dict[str, np.ndarray] | None]:
+    """A search of the whole range one pyramid level down (an eighth of the full search's
+    cells a row) over ``rows`` (first, stop): the bands at this size around it (none in the
+    other rows), and its cost-curve features at this size over those rows."""
+    first, stop = rows
     _, coarse_max = pyramid.level_down(left.shape[1], max_disp)
     coarse = scale.in_stripes(functools.partial(solve, learnt=learnt),
                               downsample(left[first:stop]), downsample(right[first:stop]),
                               coarse_max, cfg)
-    bands = pyramid.bands_from_coarse(coarse.disparity, coarse.labels, (stop - first,
-                                      left.shape[1]), max_disp, cfg.bands)
-    return bands.placed(first, left.shape[0])
+    shape = (stop - first, left.shape[1])
+    bands = pyramid.bands_from_coarse(coarse.disparity, coarse.labels, shape, max_disp,
+                                      cfg.bands)
+    curve = None if coarse.curve is None else {
+        name: upsample_nearest(values, shape) for name, values in coarse.curve.items()}
+    return bands.placed(first, left.shape[0]), curve
 
 
 def _learn(left: np.ndarray, right: np.ndarray, cfg: Config, colour_weight: float,
