@@ -191,6 +191,27 @@ def test_a_moving_object_is_seen_and_leaves_no_trail(adirondack, rng, speed):
     assert trail <= np.mean(np.abs(alone[behind] - 45) < 1) + 0.02, trail
 
 
+def test_a_stream_with_a_moving_object_gives_the_same_bytes_at_any_thread_count(adirondack,
+                                                                               rng):
+    """The coarse look, the settling and the looked curves keep the method's determinism."""
+    import numba
+
+    s = adirondack
+    clip, _ = moving_object_clip(s, rng, 16, frames=4)
+    before = numba.get_num_threads()
+    runs = []
+    try:
+        for threads in (1, numba.config.NUMBA_NUM_THREADS):
+            numba.set_num_threads(threads)
+            matcher = StereoMatcher(max_disp=s.max_disp, temporal=True)
+            results = [matcher.result(*views) for views in clip]
+            runs.append(b"".join(r.disparity.tobytes() + r.confidence.tobytes()
+                                 for r in results))
+    finally:
+        numba.set_num_threads(before)
+    assert runs[0] == runs[1]
+
+
 def test_without_the_coarse_look_a_fast_object_is_lost(adirondack, rng):
     """temporal.coarse_look off: the square moving 16 px a frame is searched near the
     background's disparities only (what the look adds; measured 0.4 % found)."""
