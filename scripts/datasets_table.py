@@ -1,7 +1,9 @@
 """One config over every dataset at once, as parameters are chosen: each dataset's mean
 headline figure (nonocc bad 1.0 on middlebury2, middlebury-third and ETH3D, bad 2.0 on
 Middlebury 2014 quarter, D1 on KITTI), the standard scenes apart from the hard ones
-(Vintage, terrains_2l, terrains_2s) and the hard ones alone, on one line.
+(Vintage, terrains_2l, terrains_2s) and the hard ones alone, on one line; and each
+dataset's two fixed halves apart (:func:`halves`): a constant is chosen on the first half of
+every dataset and kept only where the second half gains too (docs/results.md, "Two halves").
 
     python scripts/datasets_table.py CONFIG [section.key=value ...] [--data-root DIR]
 
@@ -25,6 +27,13 @@ DATASETS = ("middlebury2", "middlebury-third", "middlebury2014-quarter", "kitti2
 HARD = ("Vintage", "terrains_2l", "terrains_2s")
 
 
+def halves(names: list[str]) -> tuple[list[str], list[str]]:
+    """A data set's two fixed halves: its scenes in order of name (case aside), the first,
+    third, ... to choose a constant on, the second, fourth, ... to confirm it on."""
+    ordered = sorted(names, key=str.lower)
+    return ordered[0::2], ordered[1::2]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("config")
@@ -40,7 +49,10 @@ def main() -> None:
         figures = evaluation.headline_figures(report, "m")
         standard = [v for scene, v in figures.items() if scene not in HARD]
         hard.update({scene: v for scene, v in figures.items() if scene in HARD})
-        text = f"{name} {np.mean(standard):.2f}"
+        choose, confirm = halves([scene for scene in figures if scene not in HARD])
+        text = (f"{name} {np.mean(standard):.2f} (halves "
+                f"{np.mean([figures[s] for s in choose]):.2f} / "
+                f"{np.mean([figures[s] for s in confirm]):.2f})")
         if len(standard) < len(figures):
             text += f" (all {np.mean(list(figures.values())):.2f})"
         parts.append(text)
