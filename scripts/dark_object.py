@@ -19,6 +19,7 @@ import argparse
 import cv2
 import numpy as np
 
+from dark_views import darkened
 from vsmatch import datasets, metrics, pipeline
 from vsmatch.config import with_changes
 
@@ -40,12 +41,7 @@ def shadowed(scene, gain: float, sigma: float) -> tuple[np.ndarray, np.ndarray, 
     seen = np.zeros(region.shape, np.uint8)
     seen[ys[inside], columns[inside]] = 1
     right[cv2.dilate(seen, np.ones((3, 3), np.uint8)).astype(bool)] *= gain
-
-    def noisy(view, seed):
-        noise = np.random.default_rng(seed).normal(0.0, sigma, view.shape)
-        return np.clip(np.rint(view + noise), 0, 255).astype(np.uint8)
-
-    return noisy(left, 1), noisy(right, 2), region
+    return darkened(left, 1.0, sigma, 1), darkened(right, 1.0, sigma, 2), region
 
 
 def main() -> None:

@@ -76,7 +76,7 @@ MUTATIONS = [
              ("tests/test_temporal.py",)),
     Mutation("looked-curve-removed", "moved pixels judged on the last full search's cost "
              "curves (a view gone to noise in part stays confident)", "vsmatch/pipeline.py",
-             "    if looked is not None and looked[1] is not None:\n", "    if False:\n",
+             "    if coarse_curve is not None:\n", "    if False:\n",
              ("tests/test_temporal.py",)),
     Mutation("same-file-refusal-removed", "a refusal removed: one file as both views",
              "vsmatch/io.py", "    if same_file(Path(left_path), Path(right_path)):\n",

@@ -249,8 +249,7 @@ def moving_clip(scene, rng, speed: int, frames: int = 7):
     for k in range(frames):
         left, right = noisy(scene.left, rng), noisy(scene.right, rng)
         x = x0 + speed * k
-        left[y:y + side, x:x + side] = patch[..., :left.shape[2]] if left.ndim == 3 else \
-            patch[..., 0]
+        left[y:y + side, x:x + side] = patch
         right[y:y + side, x - disparity:x - disparity + side] = left[y:y + side, x:x + side]
         clip.append((left, right))
     inside = np.zeros((height, width), bool)

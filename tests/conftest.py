@@ -17,6 +17,13 @@ def data_root() -> Path | None:
     return None
 
 
+def no_way_to(what: str):
+    """Fail in CI (a check that cannot run there is a hole in it), skip elsewhere."""
+    if os.environ.get("CI") == "true":
+        pytest.fail(f"cannot {what} here: in CI this test must run")
+    pytest.skip(f"cannot {what} here")
+
+
 @pytest.fixture(scope="session")
 def data_dir() -> Path:
     root = data_root()
@@ -25,10 +32,7 @@ def data_dir() -> Path:
         if env:  # a data root given but unusable is a mistake, not a reason to skip
             pytest.fail(f"VSMATCH_DATA={env} holds no middlebury2/: the data tests cannot "
                         "run (unset it to skip them where there is no data)")
-        if os.environ.get("CI") == "true":
-            pytest.fail("Middlebury data not found: in CI the data tests must run "
-                        "(set VSMATCH_DATA)")
-        pytest.skip("Middlebury data not found (set VSMATCH_DATA)")
+        no_way_to("find the Middlebury data (set VSMATCH_DATA)")
     return root
 
 
@@ -86,13 +90,6 @@ def lowest_cloud_threshold() -> float:
     from vsmatch.config import bundled_config_names, load_config
 
     return min(load_config(name).cloud.min_confidence for name in bundled_config_names())
-
-
-def no_way_to(what: str):
-    """Fail in CI (a check that cannot run there is a hole in it), skip elsewhere."""
-    if os.environ.get("CI") == "true":
-        pytest.fail(f"cannot {what} here: in CI this test must run")
-    pytest.skip(f"cannot {what} here")
 
 
 @pytest.fixture

@@ -15,6 +15,7 @@ from click.testing import CliRunner
 from vsmatch import batch, io
 from vsmatch.cli import main
 
+from conftest import no_way_to
 from test_range import textured_pair
 
 
@@ -23,9 +24,7 @@ def distributed():
     try:
         import distributed
     except ImportError:
-        if os.environ.get("CI") == "true":
-            pytest.fail("Dask's distributed is not installed: CI installs the cluster extra")
-        pytest.skip("Dask's distributed is not installed (pip install 'vsmatch[cluster]')")
+        no_way_to("import Dask's distributed (pip install 'vsmatch[cluster]')")
     return distributed
 
 

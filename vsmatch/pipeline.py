@@ -125,11 +125,12 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int,
     # which a jump in exposure or a refresh searches again for (2.7 ms a frame at 640x480).
     learnt = Learnt(noise_sigma=memory.noise_sigma, width=left.shape[1],
                     colour_weight=memory.colour_weight)
-    looked = None
+    coarse_curve = None  # the coarse look's cost-curve features over its rows
     if near.look is not None:
         with timed(seconds, "coarse look"):
-            looked = _coarse_look(left, right, max_disp, cfg, learnt, near.look)
-            near = video.looked_again(near, looked[0])
+            coarse_bands, coarse_curve = _coarse_look(left, right, max_disp, cfg, learnt,
+                                                      near.look)
+            near = video.looked_again(near, coarse_bands)
     result = scale.in_stripes(functools.partial(solve, learnt=learnt), left, right, max_disp,
                               cfg, near.bands)
     result.seconds = {**seconds, **result.seconds}
@@ -137,8 +138,8 @@ def _search_near_last(left: np.ndarray, right: np.ndarray, max_disp: int,
     # The last full search's cost-curve features (a band's curve is short); where the
     # coarse look searched a moved pixel's whole range, that curve's (what it shows now).
     result.curve = memory.curve
-    if looked is not None and looked[1] is not None:
-        result.curve = video.looked_curve(memory.curve, looked[1], near.look[0], near.moved)
+    if coarse_curve is not None:
+        result.curve = video.looked_curve(memory.curve, coarse_curve, near.look[0], near.moved)
     _fit_planes(result, left, max_disp)
     result.disparity = video.hold(near, result.disparity, cfg.temporal)
     return _with_confidence(result, left, max_disp)

@@ -155,13 +155,11 @@ def looked_curve(curve: dict[str, np.ndarray], looked: dict[str, np.ndarray], fi
     (``looked``: rows ``first ..``) at its moved pixels: their confidence is of what this
     frame shows (a moved pixel over a view gone to noise had the old curve's, and stayed
     sure)."""
-    out = {}
-    for name, values in curve.items():
-        values = values.copy()
-        if name in looked:
-            rows = slice(first, first + looked[name].shape[0])
-            values[rows] = np.where(moved[rows], looked[name], values[rows])
-        out[name] = values
+    out = dict(curve)  # the features the look has not are shared, not copied
+    for name in curve.keys() & looked.keys():
+        rows = slice(first, first + looked[name].shape[0])
+        out[name] = curve[name].copy()
+        out[name][rows] = np.where(moved[rows], looked[name], curve[name][rows])
     return out
 
 
@@ -385,4 +383,4 @@ def remember(result, grey: np.ndarray, grey_right: np.ndarray, max_disp: int,
     return dataclasses.replace(memory, disparity=disparity, confidence=confidence, grey=grey,
                                grey_right=grey_right, anchor=anchor,
                                since_full=memory.since_full + 1,
-                               settling=settling.astype(np.uint8))
+                               settling=settling)
