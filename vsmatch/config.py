@@ -480,12 +480,13 @@ class TemporalConfig:
         "A full search again when a frame's mean confidence falls below this share of the "
         "last full search's."))
     settle: int = _param(4, 0, 255, doc=(
-        "Frames a changed pixel is still searched as moved after its change: what a moving "
-        "object uncovers first takes its spilt disparity, which held would stay as a trail."))
+        "Frames the pixels an object moved over (a block of change) are still searched as "
+        "moved: what it uncovers first takes its spilt disparity, which held would stay "
+        "behind it as a trail."))
     coarse_look: bool = _param(True, doc=(
-        "Changed pixels also searched where a search of the whole range one pyramid level "
-        "down puts them (an object moving faster than motion px a frame); off: only near "
-        "the last frame's disparities."))
+        "The rows of a block of change (an object) also searched over the whole range one "
+        "pyramid level down, and their moved pixels where that puts them (an object moving "
+        "faster than motion px a frame); off: only near the last frame's disparities."))
 
 
 @dataclass(frozen=True)
