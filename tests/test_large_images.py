@@ -94,16 +94,20 @@ def _regions_by_hand(volume, arms_l, arms_r, lo, count):
     return out
 
 
-def test_aggregation_over_bands_sums_the_regions_pixels_that_hold_d(rng):
-    """Bands of up to 9 candidates in a volume 9 deep, where most neighbours' bands start
-    together (the common case, summed a vector at a time) and some do not."""
+@pytest.mark.parametrize("depth", [aggregation.LANES, aggregation.LANES + 1])
+def test_aggregation_over_bands_sums_the_regions_pixels_that_hold_d(rng, depth):
+    """Bands of up to ``depth`` candidates in a volume that deep, where most neighbours'
+    bands start together (the common case) and some do not: one vector deep (the
+    coarse-to-fine search's volumes, their own kernel) and deeper (the general one)."""
     height, width, n_disp = 10, 14, 16
     full = rng.random((height, width, n_disp)).astype(np.float32)
     lo = np.where(rng.random((height, width)) < 0.7, 3,
                   rng.integers(0, 8, size=(height, width))).astype(np.int32)
-    count = np.minimum(rng.integers(1, 10, size=(height, width)), n_disp - lo).astype(np.int32)
-    bands = Bands(lo, count, 9, n_disp)
-    banded = np.zeros((height, width, 9), np.float32)
+    count = np.minimum(rng.integers(1, depth + 1, size=(height, width)),
+                       n_disp - lo).astype(np.int32)
+    count[0, :3] = 0  # pixels without candidates
+    bands = Bands(lo, count, depth, n_disp)
+    banded = np.full((height, width, depth), np.nan, np.float32)  # past a band: unused
     for y in range(height):
         for x in range(width):
             banded[y, x, :count[y, x]] = full[y, x, lo[y, x]:lo[y, x] + count[y, x]]

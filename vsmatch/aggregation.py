@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from ._kernels.aggregate import LANES, sum_along_arms, sum_over_arms
+from ._kernels.aggregate import LANES, sum_along_arms, sum_over_arms, sum_over_lanes
 from ._kernels.arms import DOWN, LEFT, RIGHT, UP
 from ._kernels.arms import cross_arms as _cross_arms_kernel
 from .bands import Bands, of
@@ -91,7 +91,10 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
     none = np.empty((0, 0, 0), np.float32)
 
     def one_pass(src, along_rows, normalise, out):
-        if narrow:
+        if narrow and current.shape[2] == LANES:
+            sum_over_lanes(src, arms_l, arms_r_rev, along_rows, bands.lo, bands.count,
+                           none if normalise else sizes, sizes if normalise else none, out)
+        elif narrow:
             sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, bands.lo,
                           bands.count, none if normalise else sizes,
                           sizes if normalise else none, out)

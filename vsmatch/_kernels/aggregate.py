@@ -206,3 +206,62 @@ def sum_along_arms(src, arms_l, arms_r_rev, along_rows, normalise, out):
                 if normalise:
                     total /= counts[hi, d] - counts[lo, d]
                 result[d] = total
+
+
+@njit(**KERNEL_OPTIONS)
+def sum_over_lanes(src, arms_l, arms_r_rev, along_rows, lo, count, counts_out, counts_in,
+                   out):
+    """:func:`sum_over_arms` over bands of at most :data:`LANES` candidates in a volume
+    exactly that deep (the coarse-to-fine search's), the same sums in the same order.
+
+    Each neighbour adds one vector of LANES whatever the two bands' offsets: candidate d
+    reads the neighbour's d + off, a lane outside either band or past the right pixel's arm
+    adding zero. Kept apart from the general kernel, whose band bookkeeping keeps LLVM
+    from vectorising this loop (measured on cones' bands: 11.9 against 24.3 ms a pass on
+    one thread); a branch on the offset stops it too.
+    """
+    height, width, depth = src.shape
+    lo_arm = LEFT if along_rows else UP
+    hi_arm = RIGHT if along_rows else DOWN
+    step_y = 1 - along_rows
+    step_x = along_rows
+    first_pass = counts_out.shape[0] > 0
+    for y in prange(height):
+        total = np.zeros(LANES, np.float32)
+        size = np.zeros(LANES, np.float32)
+        for x in range(width):
+            base = np.int64(lo[y, x])
+            n = np.int64(count[y, x])
+            if n <= 0:  # no candidates: nothing to sum
+                continue
+            for d in range(LANES):
+                total[d] = src[y, x, d]
+                size[d] = np.float32(1.0) if first_pass else counts_in[y, x, d]
+            reach = width - 1 - x + base  # the right pixels' arms from disparity base on
+            for side in range(2):
+                arm = lo_arm if side == 0 else hi_arm
+                sign = -1 if side == 0 else 1
+                for k in range(1, np.int64(arms_l[arm, y, x]) + 1):
+                    ny = y + sign * k * step_y
+                    nx = x + sign * k * step_x
+                    off = base - np.int64(lo[ny, nx])
+                    n_there = np.int64(count[ny, nx])
+                    if off <= -LANES or off >= LANES:
+                        continue  # the bands do not meet
+                    k32 = np.int32(k)
+                    for d in range(LANES):
+                        j = d + off
+                        there = (j >= 0) & (j < n_there)
+                        inside = (k32 <= np.int32(arms_r_rev[arm, y, reach + d])) & (d < n) \
+                            & there
+                        at = j if there else 0
+                        total[d] += src[ny, nx, at] if inside else np.float32(0.0)
+                        held = np.float32(1.0) if first_pass else counts_in[ny, nx, at]
+                        size[d] += held if inside else np.float32(0.0)
+            if first_pass:
+                for d in range(LANES):
+                    counts_out[y, x, d] = size[d]
+                    out[y, x, d] = total[d]
+            else:
+                for d in range(LANES):
+                    out[y, x, d] = total[d] / size[d]
