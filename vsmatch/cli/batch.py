@@ -101,7 +101,7 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
     quiet = ctx.find_root().obj.get("quiet")
     failures = []
     if todo:
-        announce_compilation(ctx)
+        announce_compilation(ctx, config)
         # The executor first: a cluster that cannot be had fails before any output.
         with make_executor(jobs, scheduler) as executor, \
                 tqdm(total=len(todo), disable=True if quiet else None, unit="pair",

@@ -415,10 +415,18 @@ def remove_left_overs(ctx: click.Context, paths) -> None:
                      err=True)
 
 
-def announce_compilation(ctx: click.Context) -> None:
-    """One line before the first run compiles the kernels (20-40 s of silence else)."""
+def announce_compilation(ctx: click.Context, config: str | None = None, bands: bool = True,
+                         stream: bool = False) -> None:
+    """Before the first run: one line, then the kernels ``config`` (a bundled name or a
+    file) calls compiled a share a core (``vsmatch.compilation``; half a minute of silence
+    else): with ``bands`` those of bands above a level down, with ``stream`` a video
+    stream's too."""
+    from .. import compilation
     from .._kernels import cache_is_cold
 
     if cache_is_cold():
-        echo(ctx, "compiling the kernels once (about 35 s; later runs start at once)",
-              err=True)
+        cores = compilation.available_cores()
+        echo(ctx, f"compiling the kernels once, on {cores} core{'s' * (cores > 1)} "
+                  "(later runs start at once)", err=True)
+        seconds = compilation.compile_ahead(config, bands, stream)
+        verbose(ctx, f"compiled in {seconds:.1f} s")

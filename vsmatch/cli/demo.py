@@ -6,7 +6,8 @@ from pathlib import Path
 
 import click
 
-from .. import evaluation, io, pipeline, preview, synthetic
+from .. import compilation, evaluation, io, pipeline, preview, synthetic
+from ..config import load_config
 from .common import (announce_compilation, check_new_folder, config_option, echo, examples,
                      friendly_errors, verbosity_options)
 
@@ -44,7 +45,8 @@ def demo(ctx, out_dir, overwrite, config):
                     f"{folder / name}: exists and an earlier demo did not write it "
                     "(--overwrite replaces it, or give another -o)")
     pair = synthetic.make_pair()
-    announce_compilation(ctx)
+    announce_compilation(ctx, config, bands=compilation.searches_bands(
+        load_config(config), pair.left.shape, 0, pair.max_disp))
     disp = pipeline.match(pair.left, pair.right, max_disp=pair.max_disp, config=config)
     bad = evaluation.bad_pixel_map(disp, pair.disparity, 1.0)
     percent = evaluation.bad_percent(disp, pair.disparity, pair.nonocc, 1.0)

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .. import confidence, geometry, io, pipeline, preview, rig, search_range
+from .. import compilation, confidence, geometry, io, pipeline, preview, rig, search_range
 from ..config import load_config
 from .common import (ALPHA, CONFIDENCE_LEVEL, FINITE, MAX_DISP, POSITIVE, announce_compilation,
                      check_outputs, check_png_range, config_option, echo, examples, given,
@@ -160,7 +160,8 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
     except ValueError as exc:
         raise click.ClickException(f"{left}: {exc}") from None
     verbose(ctx, f"searching disparities {min_disp}..{max_disp}")
-    announce_compilation(ctx)
+    announce_compilation(ctx, config, bands=compilation.searches_bands(
+        cfg, left_image.shape, min_disp, max_disp))
     result = pipeline.run(left_image, right_image, max_disp=max_disp, min_disp=min_disp,
                           config=cfg)
     remove_left_overs(ctx, outputs)
