@@ -4,7 +4,10 @@ kernel cache announced."""
 import os
 from pathlib import Path
 
+import pytest
+
 from cli_helpers import files_in, invoke, one_line_error
+from conftest import random_pair
 
 from vsmatch import pipeline
 
@@ -39,6 +42,28 @@ def test_a_cold_kernel_cache_is_announced(pair_files, tmp_path, monkeypatch):
     monkeypatch.undo()
     assert "compiling" not in invoke("run", *pair_files, "-o", tmp_path / "e.pfm",
                                      "--max-disp", 8).output
+
+
+@pytest.mark.parametrize("config, bands", [("default", False), ("fast", True)])
+def test_a_cold_cache_compiles_what_the_match_will_call(tmp_path, rng, monkeypatch, config,
+                                                        bands):
+    """On a cold cache `run` compiles the config's kernels ahead, those of bands only where
+    the pair will search them (``fast`` a level down at every size, ``default`` not on a
+    small pair)."""
+    import cv2
+
+    from vsmatch import _kernels, compilation
+
+    pair_files = [tmp_path / "l.png", tmp_path / "r.png"]
+    for path, view in zip(pair_files, random_pair(rng, height=48, width=96, shift=5)):
+        cv2.imwrite(str(path), view)
+    asked = []
+    monkeypatch.setattr(_kernels, "cache_is_cold", lambda: True)
+    monkeypatch.setattr(compilation, "compile_ahead",
+                        lambda *args, **kwargs: asked.append(args) or 0.0)
+    result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm", "--max-disp", 24,
+                    "--config", config)
+    assert result.exit_code == 0 and asked == [(config, bands, False)]
 
 
 def test_cache_is_cold_looks_where_numba_caches(tmp_path):
