@@ -92,6 +92,19 @@ def lowest_cloud_threshold() -> float:
     return min(load_config(name).cloud.min_confidence for name in bundled_config_names())
 
 
+#: File-size limits to lift as soon as the test function returns: pytest reports the test
+#: before its fixtures' teardown, and where its output goes to a file already past the
+#: limit (``pytest > log``), that report's write would fail EFBIG.
+_LIFT_AFTER_CALL: list = []
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_call(item):
+    yield
+    while _LIFT_AFTER_CALL:
+        _LIFT_AFTER_CALL.pop()()
+
+
 @pytest.fixture
 def small_disk(tmp_path):
     """``small_disk(kilobytes, read_only=False, mount=True, whole_disk=False)``: a folder
@@ -123,8 +136,13 @@ def small_disk(tmp_path):
             limits = resource.getrlimit(resource.RLIMIT_FSIZE)
             handler = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # EFBIG, not a kill
             resource.setrlimit(resource.RLIMIT_FSIZE, (kilobytes * 1024, limits[1]))
-            undo.append(lambda: (resource.setrlimit(resource.RLIMIT_FSIZE, limits),
-                                 signal.signal(signal.SIGXFSZ, handler)))
+
+            def lift():
+                resource.setrlimit(resource.RLIMIT_FSIZE, limits)
+                signal.signal(signal.SIGXFSZ, handler)
+
+            undo.append(lift)
+            _LIFT_AFTER_CALL.append(lift)
         elif read_only:
             no_way_to("mount a read-only tmpfs or drop write permission (root)")
         else:
