@@ -121,16 +121,20 @@ def test_aggregation_over_bands_sums_the_regions_pixels_that_hold_d(rng, depth):
                                        want[y, x, lo[y, x]:lo[y, x] + count[y, x]], rtol=1e-5)
 
 
-def test_scanline_over_bands_is_the_scanline_with_the_rest_infinite(rng):
+@pytest.mark.parametrize("depth", [optimization.LANES, optimization.LANES + 1])
+def test_scanline_over_bands_is_the_scanline_with_the_rest_infinite(rng, depth):
     """A band's path is the whole range's with every cost outside the bands infinite:
-    narrow bands (a vector at a time), wider ones, starts that move from pixel to pixel."""
+    narrow bands (a vector at a time), wider ones, starts that move from pixel to pixel; in
+    a volume one vector deep (coarse-to-fine's, its own kernels) and deeper (the general
+    ones)."""
     height, width, n_disp = 11, 17, 16
     full = rng.random((height, width, n_disp)).astype(np.float32) * 3
     lo = np.where(rng.random((height, width)) < 0.6, 4,
                   rng.integers(0, 8, size=(height, width))).astype(np.int32)
-    count = np.minimum(rng.integers(1, 10, size=(height, width)), n_disp - lo).astype(np.int32)
+    count = np.minimum(rng.integers(1, depth + 1, size=(height, width)),
+                       n_disp - lo).astype(np.int32)
     inside = np.zeros(full.shape, bool)
-    banded = np.zeros((height, width, 9), np.float32)
+    banded = np.full((height, width, depth), np.nan, np.float32)  # past a band: unused
     for y in range(height):
         for x in range(width):
             inside[y, x, lo[y, x]:lo[y, x] + count[y, x]] = True
@@ -144,7 +148,7 @@ def test_scanline_over_bands_is_the_scanline_with_the_rest_infinite(rng):
         want = optimization.scanline_optimise(np.where(inside, full, np.inf).astype(np.float32),
                                               left, right, cfg)
         got = optimization.scanline_optimise(banded, left, right, cfg,
-                                             bands=Bands(lo, count, 9, n_disp))
+                                             bands=Bands(lo, count, depth, n_disp))
         for y in range(height):
             for x in range(width):
                 np.testing.assert_allclose(got[y, x, :count[y, x]],

@@ -307,6 +307,120 @@ def _diagonal_kernel(banded):
     return diagonal
 
 
+@njit(inline="always")
+def _lanes_step(cost, out, y, x, ey, ex, n, base, prev_lo, prev_n, m, started, prev, cur,
+                cur_bits, tmp, bits, change_l, change_r_rev, p1s, p2s, weight):
+    """One pixel's step of a path over a band of ``n`` <= LANES candidates from ``base`` in
+    a volume LANES deep, adding ``weight`` x its path costs to ``out``; returns the path's
+    minimum. The steps of ``_walk_band_add`` for such a band, the same sums in the same
+    order, without the bookkeeping of wider bands and volumes. ``prev``: the previous
+    pixel's path costs (band ``prev_lo``, ``prev_n``; ``started`` False: none)."""
+    inf = np.float32(np.inf)
+    if not started:  # the path starts: its cost is the matching cost
+        new_min = inf
+        for d in range(LANES):
+            v = cost[y, x, d]
+            v = v if d < n else inf
+            cur[d + 1] = v
+            out[y, x, d] += weight * v
+            new_min = v if v < new_min else new_min
+    else:
+        # Two bands from one ``lo`` need no rebase: a step leaves its lanes past its band,
+        # and both ends, infinite.
+        if base != prev_lo:
+            _rebase(prev, tmp, base - prev_lo, prev_n, np.int64(LANES))
+        cl = change_l[ey, ex]
+        start = cost.shape[1] - 1 - ex + base  # change_r_rev's column of disparity base
+        p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
+        for d in range(LANES):
+            c = change_r_rev[ey, start + d]
+            v = cost[y, x, d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - m
+            v = v if d < n else inf
+            cur[d + 1] = v
+            out[y, x, d] += weight * v
+        smallest = cur_bits[1]
+        for d in range(LANES):
+            b = cur_bits[d + 1]
+            smallest = b if b < smallest else smallest
+        bits[0] = smallest
+        new_min = bits.view(np.float32)[0]
+    cur[0] = inf
+    cur[n + 1] = inf
+    cur[LANES + 1] = inf
+    return new_min
+
+
+@njit(**KERNEL_OPTIONS)
+def rows_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, out):
+    """:func:`scanline_rows` over bands in a volume :data:`LANES` deep (coarse-to-fine's):
+    the same sums, 1.4x faster than the general band kernel (cones' bands)."""
+    height, width, depth = cost.shape
+    for y in prange(height):
+        paths = np.full((2, LANES + 2), np.inf, dtype=np.float32)
+        path_bits = paths.view(np.int32)
+        tmp = np.empty(LANES + 2, dtype=np.float32)
+        bits = np.empty(1, dtype=np.int32)
+        out[y] = np.float32(0.0)  # both walks add
+        for direction in (1, -1):
+            start = 0 if direction == 1 else width - 1
+            started = False
+            prev_lo, prev_n, m = np.int64(0), np.int64(0), np.float32(0.0)
+            for step in range(width):
+                x = start + direction * step
+                n = np.int64(count[y, x])
+                if n <= 0:  # no band: the path restarts after it
+                    started = False
+                    continue
+                now = step % 2
+                ex = x if direction == 1 else x + 1  # the edge crossed, at the later pixel
+                base = np.int64(lo[y, x])
+                m = _lanes_step(cost, out, y, x, y, ex, n, base, prev_lo, prev_n, m, started,
+                                paths[1 - now], paths[now], path_bits[now], tmp, bits,
+                                change_l, change_r_rev, p1s, p2s, weight)
+                started = True
+                prev_lo, prev_n = base, n
+
+
+@njit(**KERNEL_OPTIONS)
+def columns_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, chunk, out):
+    """:func:`scanline_columns` over bands in a volume :data:`LANES` deep: the same sums,
+    1.3x faster than the general band kernel (cones' bands)."""
+    height, width, depth = cost.shape
+    n_chunks = (width + chunk - 1) // chunk
+    for c in prange(n_chunks):
+        x0 = c * chunk
+        n_cols = min(width, x0 + chunk) - x0
+        prev = np.full((n_cols, LANES + 2), np.inf, dtype=np.float32)
+        cur = np.full((n_cols, LANES + 2), np.inf, dtype=np.float32)
+        tmp = np.empty(LANES + 2, dtype=np.float32)
+        bits = np.empty(1, dtype=np.int32)
+        prev_lo = np.zeros(n_cols, dtype=np.int64)
+        prev_n = np.zeros(n_cols, dtype=np.int64)
+        started = np.zeros(n_cols, dtype=np.bool_)
+        mins = np.zeros(n_cols, dtype=np.float32)
+        for direction in (1, -1):
+            started[:] = False
+            for step in range(height):
+                y = step if direction == 1 else height - 1 - step
+                ey = y if direction == 1 else y + 1  # the edge crossed, at the later row
+                cur_bits = cur.view(np.int32)
+                for k in range(n_cols):
+                    x = x0 + k
+                    n = np.int64(count[y, x])
+                    if n <= 0:  # no band: the path restarts
+                        started[k] = False
+                        continue
+                    base = np.int64(lo[y, x])
+                    mins[k] = _lanes_step(cost, out, y, x, ey, x, n, base, prev_lo[k],
+                                          prev_n[k], mins[k], started[k], prev[k], cur[k],
+                                          cur_bits[k], tmp, bits, change_l, change_r_rev, p1s,
+                                          p2s, weight)
+                    started[k] = True
+                    prev_lo[k] = base
+                    prev_n[k] = n
+                prev, cur = cur, prev
+
+
 #: The kernels for the whole range and for bands, each compiled on its first call.
 _ROWS = {False: _row_kernel(False), True: _row_kernel(True)}
 _COLUMNS = {False: _column_kernel(False), True: _column_kernel(True)}
@@ -331,7 +445,10 @@ def scanline_rows(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, wei
     ``p1s[k]``, ``p2s[k]`` are the penalties where ``k`` (0, 1 or 2) of the two images
     change.
     """
-    _ROWS[bool(banded)](cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, out)
+    if banded and cost.shape[2] == LANES:
+        rows_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, out)
+    else:
+        _ROWS[bool(banded)](cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, out)
 
 
 def scanline_columns(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight, chunk,
@@ -343,8 +460,12 @@ def scanline_columns(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, 
     read one pixel a row (measured on the twelve standard pairs: 0.6-0.7x the time). Each
     column's sums are its own, so the chunk size does not change the result.
     """
-    _COLUMNS[bool(banded)](cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, chunk,
+    if banded and cost.shape[2] == LANES:
+        columns_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, chunk,
                            out)
+    else:
+        _COLUMNS[bool(banded)](cost, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                               chunk, out)
 
 
 def scanline_diagonal_pass(cost, lo, count, banded, change_l, change_r_rev, p1s, p2s, step_x,
