@@ -199,3 +199,28 @@ def test_a_late_second_sigterm_neither_kills_nor_prints(tmp_path, rng):
         err = proc.communicate(timeout=120)[1]
         assert proc.returncode == 143, (attempt, proc.returncode, err)
         assert "Traceback" not in err, err
+
+
+def test_sigterm_while_compiling_ahead_ends_the_compiling_workers(pair_files, tmp_path):
+    """A first run on an empty cache compiles in worker processes: SIGTERM ends the run in
+    one line and its workers with it (they would compile on for half a minute)."""
+    import os
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    proc = subprocess.Popen([sys.executable, "-m", "vsmatch", "run", str(pair_files[0]),
+                             str(pair_files[1]), "-o", str(tmp_path / "d.pfm"),
+                             "--max-disp", "8"], env=env, stderr=subprocess.PIPE, text=True)
+    assert "compiling the kernels once" in proc.stderr.readline()
+    deadline = time.time() + 60
+    while time.time() < deadline and not descendants(proc.pid):
+        time.sleep(0.1)
+    workers = descendants(proc.pid)
+    assert workers  # one a core but this process's own share (2 cores here: one)
+    time.sleep(0.5)  # compiling: a share takes several seconds (the largest kernel, ~4 s)
+    os.kill(proc.pid, signal.SIGTERM)
+    sent = time.time()
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143 and err.strip().splitlines() == ["vsmatch: terminated"], err
+    assert time.time() - sent < 6  # not after the workers' shares (~15 s here)
+    assert not any(map(running, workers)), [p for p in workers if running(p)]
+    assert not (tmp_path / "d.pfm").exists()

@@ -13,12 +13,11 @@ as before: this only saves time.
 
 from __future__ import annotations
 
-import concurrent.futures
 import importlib
 import json
-import multiprocessing
 import os
 import pkgutil
+import subprocess
 import sys
 import time
 from importlib import resources
@@ -189,29 +188,41 @@ def compile_ahead(config: str | None, bands: bool = True, stream: bool = False,
 def compile_kernels(wanted: dict[str, list[str]], workers: int | None = None) -> float:
     """Compile ``wanted`` (kernel name: signatures) into Numba's cache in ``workers``
     processes (default: one a core), this one taking a share too; the seconds it took. A
-    failed worker is ignored: its kernels compile on their first call."""
+    worker that fails is ignored (its kernels compile on their first call); an interrupted
+    compile stops the workers with it."""
     start = time.perf_counter()
     dealt = shares(wanted, load_record()["seconds"], workers or available_cores())
-    if len(dealt) <= 1:
-        for share in dealt:
-            _compile_share(share)
-        return time.perf_counter() - start
+    if not dealt:
+        return 0.0
     mine, theirs = dealt[0], dealt[1:]
-    context = multiprocessing.get_context("spawn")  # a forked Numba runtime is not safe
+    started = []
     try:
-        with concurrent.futures.ProcessPoolExecutor(len(theirs), mp_context=context) as pool:
-            futures = [pool.submit(_compile_share, share) for share in theirs]
-            _compile_share(mine)
-            concurrent.futures.wait(futures)
-    except (OSError, concurrent.futures.process.BrokenProcessPool):
-        pass  # no processes to be had: what is left compiles on its first call
+        for share in theirs:
+            # A fresh interpreter each (a forked Numba runtime is not safe), the share on
+            # its standard input.
+            worker = subprocess.Popen([sys.executable, "-m", "vsmatch.compilation", "--share"],
+                                      stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.DEVNULL, text=True)
+            started.append(worker)
+            try:
+                worker.stdin.write(json.dumps(share))
+                worker.stdin.close()
+            except OSError:  # it died at once: its kernels compile on their first call
+                pass
+        _compile_share(mine)
+        for worker in started:
+            worker.wait()
+    except BaseException:
+        for worker in started:
+            worker.kill()
+            worker.wait()
+        raise
     return time.perf_counter() - start
 
 
 def _record_everything() -> dict:
     """Record each bundled config's kernels for each of :data:`USES`, each in a fresh
     process with an empty cache (the compile times are a cold start's); write nothing."""
-    import subprocess
     import tempfile
 
     from .config import bundled_config_names
@@ -272,6 +283,9 @@ def _child(config: str, what: str) -> None:
 def main(argv: list[str]) -> int:
     if argv[:1] == ["--child"]:
         _child(argv[1], argv[2])
+        return 0
+    if argv[:1] == ["--share"]:  # a worker of compile_kernels
+        _compile_share([(name, signatures) for name, signatures in json.load(sys.stdin)])
         return 0
     if argv[:1] != ["--write"] and argv[:1] != ["--print"]:
         print("usage: python -m vsmatch.compilation --write | --print", file=sys.stderr)
