@@ -12,8 +12,9 @@ from vsmatch.config import bundled_config_names
 
 
 def _called(config: str, what: str) -> dict[str, list[str]]:
-    """The kernels (and signatures) ``what`` (match or stream) of ``config`` calls, run in a
-    fresh process (this one's kernels hold every signature the tests met)."""
+    """The kernels (and signatures) ``what`` (one of ``compilation.USES``) of ``config``
+    calls, run in a fresh process (this one's kernels hold every signature the tests
+    met)."""
     out = subprocess.run([sys.executable, "-m", "vsmatch.compilation", "--child", config,
                           what], check=True, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])["signatures"]
@@ -29,9 +30,7 @@ def test_the_record_lists_every_kernel_a_config_calls(config, use):
     entry = compilation.load_record()["configs"][config]
     called = _called(config, use)
     if use != "match":
-        called = {k: [s for s in v if s not in entry["match"].get(k, [])]
-                  for k, v in called.items()}
-        called = {k: v for k, v in called.items() if v}
+        called = compilation._beyond(called, entry["match"])
     assert called == entry[use]
 
 

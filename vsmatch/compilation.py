@@ -13,6 +13,7 @@ as before: this only saves time.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import json
 import os
@@ -110,10 +111,8 @@ def _types():
     return {name: getattr(types, name) for name in dir(types)}
 
 
-def _compile_share(share: list[tuple[str, list[str]]]) -> float:
-    """Compile each ``(kernel name, [signature, ...])`` of ``share`` (into Numba's cache);
-    the seconds it took."""
-    start = time.perf_counter()
+def _compile_share(share: list[tuple[str, list[str]]]) -> None:
+    """Compile each ``(kernel name, [signature, ...])`` of ``share`` (into Numba's cache)."""
     dispatchers = kernel_dispatchers()
     names = _types()
     for name, signatures in share:
@@ -122,12 +121,12 @@ def _compile_share(share: list[tuple[str, list[str]]]) -> float:
             continue
         for text in signatures:
             dispatcher.compile(eval(text, {"__builtins__": {}}, names))  # noqa: S307
-    return time.perf_counter() - start
 
 
+@functools.lru_cache(maxsize=None)
 def load_record() -> dict:
     """``kernel_signatures.json``: ``{"configs": {name: {kernel: [signature, ...]}},
-    "seconds": {kernel: compile seconds}}``."""
+    "seconds": {kernel: compile seconds}}`` (read once; not to be changed)."""
     text = (resources.files("vsmatch") / SIGNATURES_FILE).read_text()
     return json.loads(text)
 
@@ -149,11 +148,10 @@ def kernels_for(config: str | None, bands: bool = True, stream: bool = False
 
 def searches_bands(cfg, shape: tuple[int, ...], min_disp: int, max_disp: int) -> bool:
     """Whether a match of a pair of ``shape`` over ``min_disp .. max_disp`` with ``cfg``
-    (a Config) searches bands above a level down (as ``vsmatch.pipeline`` decides)."""
-    from . import pyramid
+    (a Config) searches bands above a level down (the pipeline's own count of levels)."""
+    from .scale import search_levels
 
-    return pyramid.coarse_levels(shape[1], max_disp - min_disp + 1, cfg.pyramid.max_row_cells,
-                                 cfg.pyramid.min_levels, shape[0], cfg.pyramid.max_cells) > 0
+    return search_levels(shape[1], shape[0], max_disp - min_disp, cfg) > 0
 
 
 def shares(wanted: dict[str, list[str]], seconds: dict[str, float], workers: int

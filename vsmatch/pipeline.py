@@ -82,8 +82,7 @@ def _search_whole_range(left: np.ndarray, right: np.ndarray, max_disp: int,
     learnt = _learn(left, right, cfg, weight, seconds)
     # 3. Costs, aggregation, scanline, winners, checks and refinement (vsmatch.level), on
     #    the whole range where a row fits, else a level down and in bands above it.
-    levels = pyramid.coarse_levels(left.shape[1], max_disp + 1, cfg.pyramid.max_row_cells,
-                                   cfg.pyramid.min_levels, left.shape[0], cfg.pyramid.max_cells)
+    levels = scale.search_levels(left.shape[1], left.shape[0], max_disp, cfg)
     result = scale.coarse_to_fine(functools.partial(solve, learnt=learnt), left, right,
                                   max_disp, cfg, levels)
     result.seconds = {**seconds, **result.seconds}

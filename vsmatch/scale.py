@@ -89,12 +89,18 @@ def _placed(result: MatchResult, shape: tuple[int, int], keep: slice, min_disp: 
     return result
 
 
+def search_levels(width: int, height: int, max_disp: int, cfg: Config) -> int:
+    """Pyramid levels below views ``width`` x ``height`` where ``cfg``'s full search over
+    ``0 .. max_disp`` runs (:func:`vsmatch.pyramid.coarse_levels` with the config's limits;
+    ``height`` 0: no limit on the pair's cells)."""
+    return pyramid.coarse_levels(width, max_disp + 1, cfg.pyramid.max_row_cells,
+                                 cfg.pyramid.min_levels, height, cfg.pyramid.max_cells)
+
+
 def full_search_size(width: int, max_disp: int, cfg: Config, height: int = 0
                      ) -> tuple[int, int]:
     """Width and disparity count of the pyramid level where the full search runs."""
-    for _ in range(pyramid.coarse_levels(width, max_disp + 1, cfg.pyramid.max_row_cells,
-                                          cfg.pyramid.min_levels, height,
-                                          cfg.pyramid.max_cells)):
+    for _ in range(search_levels(width, height, max_disp, cfg)):
         width, max_disp = pyramid.level_down(width, max_disp)
     return width, max_disp + 1
 

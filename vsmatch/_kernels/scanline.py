@@ -314,7 +314,10 @@ def _lanes_step(cost, out, y, x, ey, ex, n, base, prev_lo, prev_n, m, started, p
     a volume LANES deep, adding ``weight`` x its path costs to ``out``; returns the path's
     minimum. The steps of ``_walk_band_add`` for such a band, the same sums in the same
     order, without the bookkeeping of wider bands and volumes. ``prev``: the previous
-    pixel's path costs (band ``prev_lo``, ``prev_n``; ``started`` False: none)."""
+    pixel's path costs (band ``prev_lo``, ``prev_n``; ``started`` False: none). A copy of
+    :func:`_path_steps`' lanes steps that indexes the volumes rather than taking a pixel's
+    views: calling those steps here cost a third of the gain (cones' bands, 2 threads: rows
+    5.8 against 4.2 ms, columns 6.5 against 5.2)."""
     inf = np.float32(np.inf)
     if not started:  # the path starts: its cost is the matching cost
         new_min = inf
