@@ -60,10 +60,31 @@ def test_a_cold_cache_compiles_what_the_match_will_call(tmp_path, rng, monkeypat
     asked = []
     monkeypatch.setattr(_kernels, "cache_is_cold", lambda: True)
     monkeypatch.setattr(compilation, "compile_ahead",
-                        lambda *args, **kwargs: asked.append(args) or 0.0)
+                        lambda *args, **kwargs: asked.append((args, kwargs)) or 0.0)
     result = invoke("run", *pair_files, "-o", tmp_path / "d.pfm", "--max-disp", 24,
                     "--config", config)
-    assert result.exit_code == 0 and asked == [(config, bands, False)]
+    assert result.exit_code == 0 and asked == [((config, bands, False), {"also": ()})]
+
+
+def test_a_cold_cache_compiles_before_the_range_is_found(data_dir, tmp_path, monkeypatch):
+    """Finding the range runs a match of the default config's: on a cold cache the kernels
+    are compiled ahead before it (they were compiled one after another there, and the
+    compiling ahead after it found a warm cache), bands included, the range not known yet;
+    a swapped pair is refused before any compiling."""
+    from vsmatch import _kernels, compilation
+
+    asked = []
+    monkeypatch.setattr(_kernels, "cache_is_cold", lambda: True)
+    monkeypatch.setattr(compilation, "compile_ahead",
+                        lambda *args, **kwargs: asked.append((args, kwargs)) or 0.0)
+    cones = data_dir / "middlebury2" / "cones"
+    swapped = invoke("run", cones / "imR.png", cones / "imL.png", "-o", tmp_path / "s.pfm",
+                     "--config", "fast")
+    assert swapped.exit_code == 1 and asked == []
+    result = invoke("run", cones / "imL.png", cones / "imR.png", "-o", tmp_path / "d.pfm",
+                    "--config", "fast")
+    assert result.exit_code == 0
+    assert asked[0] == (("fast", True, False), {"also": ("default",)})
 
 
 def test_cache_is_cold_looks_where_numba_caches(tmp_path):

@@ -110,3 +110,14 @@ def test_kernels_compiled_ahead_in_two_processes_load_from_the_cache(tmp_path):
     out = subprocess.run([sys.executable, "-c", _SECOND_PROCESS, json.dumps(wanted)],
                          env=env, check=True, capture_output=True, text=True).stdout
     assert {"block_means", "map_colours"} <= set(json.loads(out.strip().splitlines()[-1]))
+
+
+def test_also_adds_another_configs_whole_range_match():
+    """Finding a range runs the default config's match: ``also`` adds its kernels (and no
+    band or stream kernels of its own)."""
+    both = compilation.kernels_for("census", bands=False, also=("default",))
+    for kernel, signatures in compilation.kernels_for("default", bands=False).items():
+        assert set(signatures) <= set(both[kernel])
+    for kernel, signatures in compilation.kernels_for("census", bands=False).items():
+        assert set(signatures) <= set(both[kernel])
+    assert "scanline.rows_over_lanes" not in both

@@ -131,18 +131,22 @@ def load_record() -> dict:
     return json.loads(text)
 
 
-def kernels_for(config: str | None, bands: bool = True, stream: bool = False
-                ) -> dict[str, list[str]]:
+def kernels_for(config: str | None, bands: bool = True, stream: bool = False,
+                also: tuple[str, ...] = ()) -> dict[str, list[str]]:
     """The kernels (and their signatures) ``config`` (a bundled name; else the default's)
     calls in a match, with ``bands`` where it searches bands above a level down, and with
-    ``stream`` in a video stream's frames too."""
+    ``stream`` in a video stream's frames too; and those of a whole-range match of each
+    config of ``also`` (finding a pair's range runs the default config's)."""
     record = load_record()["configs"]
-    entry = record[config if config in record else FALLBACK_CONFIG]
+    entries = [(record[name if name in record else FALLBACK_CONFIG], takes)
+               for name, takes in [(config, (True, bands, stream))]
+               + [(name, (True, False, False)) for name in also]]
     wanted: dict[str, set[str]] = {}
-    for use, taken in zip(USES, (True, bands, stream)):
-        if taken:
-            for kernel, signatures in entry[use].items():
-                wanted.setdefault(kernel, set()).update(signatures)
+    for entry, takes in entries:
+        for use, taken in zip(USES, takes):
+            if taken:
+                for kernel, signatures in entry[use].items():
+                    wanted.setdefault(kernel, set()).update(signatures)
     return {kernel: sorted(signatures) for kernel, signatures in sorted(wanted.items())}
 
 
@@ -176,11 +180,11 @@ def available_cores() -> int:
 
 
 def compile_ahead(config: str | None, bands: bool = True, stream: bool = False,
-                  workers: int | None = None) -> float:
+                  workers: int | None = None, also: tuple[str, ...] = ()) -> float:
     """Compile the kernels ``config`` calls (:func:`kernels_for`), a share a core; the
     seconds it took. Call it where the cache is cold (``vsmatch._kernels.cache_is_cold``):
     with a warm one each share only loads its kernels."""
-    return compile_kernels(kernels_for(config, bands, stream), workers)
+    return compile_kernels(kernels_for(config, bands, stream, also), workers)
 
 
 def compile_kernels(wanted: dict[str, list[str]], workers: int | None = None) -> float:

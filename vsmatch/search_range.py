@@ -25,6 +25,7 @@ prints the table).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -134,8 +135,8 @@ class SearchRange:
 
 
 def resolve_range(left: np.ndarray, right: np.ndarray, *, min_disp: int | None = None,
-                  max_disp: int | None = None, camera=None,
-                  rectified_here: bool = False) -> SearchRange:
+                  max_disp: int | None = None, camera=None, rectified_here: bool = False,
+                  before_dense_check: Callable[[], None] | None = None) -> SearchRange:
     """The one range policy of every entry point (``run``, ``match``, ``StereoMatcher``,
     ``batch``, ``eval``): a given ``max_disp`` searches ``min_disp`` (default 0) ..
     ``max_disp``; else the calibration's ``ndisp`` (from ``min_disp`` when given, else
@@ -143,7 +144,9 @@ def resolve_range(left: np.ndarray, right: np.ndarray, *, min_disp: int | None =
     from ``min_disp`` when given, and never below what the calibration allows (a
     disparity below ``-doffs`` lies beyond infinity). ``rectified_here``: the views were
     rectified by vsmatch from a raw rig's calibration (a problem is said of that).
-    Raises :class:`RangeError` (or :class:`PairGeometryError`)."""
+    ``before_dense_check`` is called before the range found from the pair runs its match
+    (the command line compiles the kernels then). Raises :class:`RangeError` (or
+    :class:`PairGeometryError`)."""
     if max_disp is not None:
         return SearchRange(0 if min_disp is None else min_disp, max_disp, "given")
     calibrated = None if camera is None else camera.search_range(left.shape[1])
@@ -152,7 +155,8 @@ def resolve_range(left: np.ndarray, right: np.ndarray, *, min_disp: int | None =
         return SearchRange(low, low + calibrated[1] - calibrated[0], "calibration")
     try:
         found = estimate_disparity_range(
-            left, right, lowest=None if camera is None else camera.lowest_disparity())
+            left, right, lowest=None if camera is None else camera.lowest_disparity(),
+            before_dense_check=before_dense_check)
     except RangeError as exc:
         if rectified_here:
             raise type(exc)(said_of_rig(str(exc))) from None
@@ -168,11 +172,14 @@ def said_of_rig(problem: str) -> str:
 
 def estimate_disparity_range(left: np.ndarray, right: np.ndarray,
                              matches: FeatureMatches | None = None,
-                             lowest: int | None = None) -> DisparityRange:
+                             lowest: int | None = None,
+                             before_dense_check: Callable[[], None] | None = None
+                             ) -> DisparityRange:
     """The search range for a rectified pair (BGR or grey uint8 views): ``0 .. max``, or
     from a negative bottom when the matches show negative disparities, but never below
-    ``lowest`` (a calibration's: the disparity of a point at infinity). Raises
-    :class:`PairGeometryError` for swapped or unrectified views."""
+    ``lowest`` (a calibration's: the disparity of a point at infinity); ``before_dense_check``
+    as :func:`resolve_range` takes it. Raises :class:`PairGeometryError` for swapped or
+    unrectified views."""
     width = left.shape[1]
     matches = feature_matches(left, right) if matches is None else matches
     problem = pair_problem(matches)
@@ -186,6 +193,8 @@ def estimate_disparity_range(left: np.ndarray, right: np.ndarray,
         raise RangeError(f"could not estimate the disparity range (only "
                          f"{disparities.size} consistent feature matches); give --max-disp")
     low = float(np.percentile(disparities, LOW_PERCENTILE))
+    if before_dense_check is not None:
+        before_dense_check()
     dense, dense_low = dense_estimate(left, right, low)
     top = sparse if dense is None else max(sparse, min(dense, DENSE_MAX_GAIN * sparse))
     max_disp = math.ceil(MARGIN_FACTOR * max(top, 0.0) + MARGIN_PIXELS)

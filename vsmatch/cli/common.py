@@ -416,11 +416,11 @@ def remove_left_overs(ctx: click.Context, paths) -> None:
 
 
 def announce_compilation(ctx: click.Context, config: str | None = None, bands: bool = True,
-                         stream: bool = False) -> None:
+                         stream: bool = False, also: tuple[str, ...] = ()) -> None:
     """Before the first run: one line, then the kernels ``config`` (a bundled name or a
     file) calls compiled a share a core (``vsmatch.compilation``; half a minute of silence
     else): with ``bands`` those of bands above a level down, with ``stream`` a video
-    stream's too."""
+    stream's too, and a whole-range match's of each config of ``also``."""
     from .. import compilation
     from .._kernels import cache_is_cold
 
@@ -428,5 +428,5 @@ def announce_compilation(ctx: click.Context, config: str | None = None, bands: b
         cores = compilation.available_cores()
         echo(ctx, f"compiling the kernels once, on {cores} core{'s' * (cores > 1)} "
                   "(later runs start at once)", err=True)
-        seconds = compilation.compile_ahead(config, bands, stream)
+        seconds = compilation.compile_ahead(config, bands, stream, also=also)
         verbose(ctx, f"compiled in {seconds:.1f} s")

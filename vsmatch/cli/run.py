@@ -8,7 +8,7 @@ import click
 import numpy as np
 
 from .. import compilation, confidence, geometry, io, pipeline, preview, rig, search_range
-from ..config import load_config
+from ..config import DEFAULT_CONFIG_NAME, load_config
 from .common import (ALPHA, CONFIDENCE_LEVEL, FINITE, MAX_DISP, POSITIVE, announce_compilation,
                      check_outputs, check_png_range, config_option, echo, examples, given,
                      friendly_errors, max_memory_option, remove_left_overs, verbose,
@@ -137,10 +137,17 @@ def run(ctx, left, right, output, max_disp, min_disp, calib, alpha, rectified_di
             camera.search_range(width) is None):
         verbose(ctx, f"{calib[0]}: ndisp={camera.ndisp} is half the image width or more, "
                       "taken as 'unknown': finding the range from the pair")
+    def before_dense_check():
+        # Finding the range runs a match of its own (the default config's) once the feature
+        # matches passed: compiled ahead with the config's kernels, bands included (the
+        # range, which decides them, is not known yet).
+        announce_compilation(ctx, config, bands=True, also=(DEFAULT_CONFIG_NAME,))
+
     try:
         searched = search_range.resolve_range(left_image, right_image, min_disp=min_disp,
                                               max_disp=max_disp, camera=camera,
-                                              rectified_here=raw_rig is not None)
+                                              rectified_here=raw_rig is not None,
+                                              before_dense_check=before_dense_check)
     except ValueError as exc:
         raise click.ClickException(f"{left}: {exc}") from None
     if searched.found is not None:
