@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from .. import batch
-from ..config import load_config
+from ..config import DEFAULT_CONFIG_NAME, load_config
 from ..executors import make_executor
 from .common import (CONFIDENCE_LEVEL, MAX_DISP, announce_compilation, config_option, echo,
                      examples, friendly_errors, given, max_memory_option, scheduler_address,
@@ -101,7 +101,9 @@ def batch_command(ctx, source, out_dir, fmt, max_disp, config, jobs, scheduler, 
     quiet = ctx.find_root().obj.get("quiet")
     failures = []
     if todo:
-        announce_compilation(ctx, config)
+        # A pair without a range finds it with the default config's match first.
+        finding = any(job.max_disp is None for job in todo)
+        announce_compilation(ctx, config, also=(DEFAULT_CONFIG_NAME,) if finding else ())
         # The executor first: a cluster that cannot be had fails before any output.
         with make_executor(jobs, scheduler) as executor, \
                 tqdm(total=len(todo), disable=True if quiet else None, unit="pair",

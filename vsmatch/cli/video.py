@@ -11,6 +11,7 @@ import cv2
 import numpy as np
 
 from .. import confidence, frames, geometry, io, preview
+from ..config import DEFAULT_CONFIG_NAME
 from ..matcher import StereoMatcher
 from ..search_range import PairGeometryError, RangeError
 from .common import (MAX_DISP, announce_compilation, check_outputs, config_option, echo, examples,
@@ -139,7 +140,8 @@ def video(ctx, left, right, output, side_by_side, frames_dir, depth_dir, depth_p
         pairs = frames.FramePairs(names, sources)
     stereo = StereoMatcher(max_disp=max_disp, min_disp=min_disp, config=config,
                            calib=list(calib) or None, temporal=temporal)
-    announce_compilation(ctx, config, stream=temporal)
+    announce_compilation(ctx, config, stream=temporal,  # a range to find: default's match
+                         also=(DEFAULT_CONFIG_NAME,) if max_disp is None else ())
     count, start = 0, time.perf_counter()
     threshold = stereo.config.cloud.min_confidence  # dimmed below it, as --preview does
     quiet = ctx.find_root().obj.get("quiet")
