@@ -215,7 +215,7 @@ def test_sigterm_while_compiling_ahead_ends_the_compiling_workers(pair_files, tm
     while time.time() < deadline and not descendants(proc.pid):
         time.sleep(0.1)
     workers = descendants(proc.pid)
-    assert workers  # one a core but this process's own share (2 cores here: one)
+    assert workers  # one a core; this process only waits on them
     time.sleep(0.5)  # compiling: a share takes several seconds (the largest kernel, ~4 s)
     os.kill(proc.pid, signal.SIGTERM)
     sent = time.time()

@@ -189,17 +189,15 @@ def compile_ahead(config: str | None, bands: bool = True, stream: bool = False,
 
 def compile_kernels(wanted: dict[str, list[str]], workers: int | None = None) -> float:
     """Compile ``wanted`` (kernel name: signatures) into Numba's cache in ``workers``
-    processes (default: one a core), this one taking a share too; the seconds it took. A
-    worker that fails is ignored (its kernels compile on their first call); an interrupted
-    compile stops the workers with it."""
+    processes (default: one a core); the seconds it took. This process only waits: a
+    signal reaches it at once (a kernel compiling here would hold it for seconds). A worker
+    that fails is ignored (its kernels compile on their first call); an interrupted compile
+    stops the workers with it."""
     start = time.perf_counter()
     dealt = shares(wanted, load_record()["seconds"], workers or available_cores())
-    if not dealt:
-        return 0.0
-    mine, theirs = dealt[0], dealt[1:]
     started = []
     try:
-        for share in theirs:
+        for share in dealt:
             # A fresh interpreter each (a forked Numba runtime is not safe), the share on
             # its standard input.
             worker = subprocess.Popen([sys.executable, "-m", "vsmatch.compilation", "--share"],
@@ -211,7 +209,6 @@ def compile_kernels(wanted: dict[str, list[str]], workers: int | None = None) ->
                 worker.stdin.close()
             except OSError:  # it died at once: its kernels compile on their first call
                 pass
-        _compile_share(mine)
         for worker in started:
             worker.wait()
     except BaseException:

@@ -32,7 +32,7 @@ from importlib import resources
 import cv2
 import numpy as np
 
-from ._kernels.confidence import cost_curve, logistic
+from ._kernels.confidence import cost_curve, logistic, repeats_at, rival_offsets
 from .bands import Bands, of
 from .disparity import VALID, MISMATCHED
 from .images import grey_levels
@@ -44,7 +44,7 @@ FEATURES = ("bias", "margin", "margin_sq", "below_mean", "valid", "mismatched",
             "fill_distance", "support", "texture", "jump_distance", "view_edge",
             "raw_margin")
 #: Curve features the full search hands on (through stripes and pyramid levels).
-CURVE_FEATURES = ("margin", "below_mean", "support", "raw_margin")
+CURVE_FEATURES = ("margin", "below_mean", "support", "raw_margin", "repeated")
 #: Added to the costs the curve's ratios divide by: a flat curve of tiny costs (a blank
 #: pair, where rounding alone separates the minima) must not look sharp. The costs the
 #: winner is chosen on are 0.2-2.8 per pixel on real scenes (cones: the 1st-99th
@@ -95,6 +95,37 @@ def curve_features(curves: tuple[np.ndarray, ...],
         features["support"] = np.empty(shape, np.float32)
         log1p_into(arms.astype(np.float32).sum(axis=0), features["support"])
     return {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in features.items()}
+
+
+#: Repeated texture (fins, fences, tiles): a pixel whose aggregated cost curve has another
+#: valley (behind a rise of at least RIVAL_HUMP x the curve's mean above its best) within
+#: RIVAL_LEVEL x (mean - best + RIVAL_FLOOR) of the winner's cost, where the left view
+#: repeats itself at that offset (REPEAT_RADIUS, REPEAT_SIMILAR: :func:`repeated_texture`).
+#: Measured on synthetic fins of 5-16 px in front of a wall and on the datasets
+#: (docs/confidence.md, "Repeated texture"): the view's test is what tells fins from fine
+#: random texture (KITTI's near road has such rivals on 10-25 % of its confident pixels,
+#: and no repeat).
+RIVAL_HUMP, RIVAL_LEVEL, RIVAL_FLOOR, RIVAL_REACH = 0.5, 0.1, 0.05, 32
+REPEAT_RADIUS, REPEAT_REACH, REPEAT_SIMILAR = 2, 8, 0.5
+#: A repeat is a region's property: a pixel with more than REPEAT_SHARE of its
+#: REPEAT_WINDOW square repeating keeps at most RANGE_END_CONFIDENCE (its match could be a
+#: period off with as clear a curve as the right one, once the scanline settles it).
+REPEAT_WINDOW, REPEAT_SHARE = 15, 0.2
+
+
+def repeated_texture(aggregated: np.ndarray, winners: np.ndarray,
+                     curves: tuple[np.ndarray, ...], grey: np.ndarray) -> np.ndarray:
+    """1 where a pixel's match has a rival a repeat of the left view away (float32 0/1
+    map; ``aggregated``: the whole-range costs before the scanline optimisation,
+    ``winners`` the chosen disparities, ``curves`` their :func:`cost_curves` on
+    ``aggregated``, ``grey`` the left view's grey levels)."""
+    offsets = np.empty(winners.shape, np.int32)
+    rival_offsets(aggregated, np.ascontiguousarray(winners, dtype=np.int32), *curves,
+                  RIVAL_HUMP, RIVAL_LEVEL, RIVAL_FLOOR, RIVAL_REACH, offsets)
+    repeated = np.empty(winners.shape, np.float32)
+    repeats_at(np.ascontiguousarray(grey, dtype=np.float32), offsets, REPEAT_RADIUS,
+               REPEAT_REACH, REPEAT_SIMILAR, repeated)
+    return repeated
 
 
 def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.ndarray,
@@ -151,6 +182,7 @@ def confidence_map(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
         cap_range_ends(block, disp, n_disp)
         cap_flat_blobs(block, disp, features[FEATURES.index("texture")])
         cap_textureless(block, features[FEATURES.index("texture")])
+        cap_repeated(block, curve["repeated"][rows])
         out[top:bottom] = block[top - y0:bottom - y0]
     return out
 
@@ -273,6 +305,14 @@ def cap_textureless(confidence: np.ndarray, texture: np.ndarray) -> None:
     """Cap, in place, the confidence of pixels without texture (``texture``: the feature)
     at :data:`TEXTURELESS_CONFIDENCE`."""
     _cap(confidence, texture < np.float32(np.log1p(NO_TEXTURE)), TEXTURELESS_CONFIDENCE)
+
+
+def cap_repeated(confidence: np.ndarray, repeated: np.ndarray) -> None:
+    """Cap, in place, the confidence where more than :data:`REPEAT_SHARE` of the
+    :data:`REPEAT_WINDOW` square around a pixel is ``repeated`` (the curve feature of
+    :func:`repeated_texture`) at :data:`RANGE_END_CONFIDENCE`."""
+    share = cv2.blur(repeated, (REPEAT_WINDOW, REPEAT_WINDOW))
+    _cap(confidence, share > REPEAT_SHARE, RANGE_END_CONFIDENCE)
 
 
 def _cap(confidence: np.ndarray, where: np.ndarray, value: float) -> None:

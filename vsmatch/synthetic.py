@@ -80,3 +80,38 @@ def _inside(kind: str, shape, u: np.ndarray, ys: np.ndarray) -> np.ndarray:
         return (u >= x0) & (u < x1) & (ys >= y0) & (ys < y1)
     cx, cy, r = shape
     return (u - cx) ** 2 + (ys - cy) ** 2 < r * r
+
+
+def fins_pair(period: int = 12, width: int = 480, height: int = 360, wall: float = 30.0,
+              fins: float = 42.0, noise: float = 1.0, seed: int = 0) -> SyntheticPair:
+    """Repeated texture: a panel of vertical fins (bright and dark stripes of ``period``
+    px, like a radiator's) at disparity ``fins`` in front of a randomly textured wall at
+    ``wall``, grey, each view with its own sensor noise of ``noise`` grey levels. Every
+    fin pixel matches as well a period away; the panel's edges alone tell which."""
+    rng = np.random.default_rng(seed)
+    margin = int(np.ceil(max(wall, fins))) + 1
+    columns = np.arange(width + 2 * margin, dtype=np.float32) - margin  # surface u
+    texture = cv2.GaussianBlur(rng.random((height, columns.size), dtype=np.float32),
+                               (0, 0), 1.2)
+    texture = 60 + 150 * (texture - texture.min()) / float(texture.max() - texture.min())
+    stripes = np.where((columns % period) < period / 2, 190.0, 70.0).astype(np.float32)
+    stripes = cv2.GaussianBlur(np.repeat(stripes[None, :], height, 0), (0, 0), 0.7)
+    stripes *= (0.9 + 0.1 * np.linspace(0, 1, height, dtype=np.float32))[:, None]  # shading
+    x0, x1 = int(0.25 * width), int(0.75 * width)
+    rows = slice(int(0.2 * height), int(0.8 * height))
+    xs = np.arange(width, dtype=np.float32)
+    views = []
+    for shift in (0.0, 1.0):  # left view, right view: a point at u shows at x = u - shift d
+        image = np.stack([np.interp(xs + shift * wall, columns, row) for row in texture])
+        u = xs + shift * fins
+        panel = (u >= x0) & (u < x1)
+        image[rows, panel] = np.stack([np.interp(u, columns, row)
+                                       for row in stripes[rows]])[:, panel]
+        image += rng.normal(0.0, noise, image.shape)
+        views.append(np.clip(np.round(image), 0, 255).astype(np.uint8))
+    disparity = np.full((height, width), wall, np.float32)
+    disparity[rows, x0:x1] = fins
+    nonocc = xs[None, :] >= disparity  # its match inside the right view
+    hidden = (xs >= x0 - (fins - wall)) & (xs < x0)  # wall the panel hides from the right
+    nonocc[rows, hidden] = False
+    return SyntheticPair(views[0], views[1], disparity, nonocc, int(np.ceil(max(wall, fins))) + 16)

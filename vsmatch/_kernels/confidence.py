@@ -72,3 +72,94 @@ def logistic(features, weights, out):
         for x in range(width):
             clipped = min(np.float32(30.0), max(np.float32(-30.0), score[x]))
             out[y, x] = np.float32(1.0) / (np.float32(1.0) + np.exp(-clipped))
+
+
+@njit(**KERNEL_OPTIONS)
+def rival_offsets(volume, disp, best, second, mean, hump, level, floor, reach, out):
+    """Per pixel, the offset (disparities, signed) from the chosen ``disp[y, x]`` to the
+    lowest *separated* rival on its whole-range cost curve ``volume[y, x, :]`` (in-view
+    candidates d <= x, at most ``reach`` from the winner): a candidate with a rise of at
+    least ``hump`` x (mean - best) between it and the winner, so another valley, not the
+    winner's own slope. 0 unless the rival is within ``level`` x (mean - best + ``floor``)
+    of the winner's cost. ``best``, ``second``, ``mean``: the curve's :func:`cost_curve`
+    maps; a second minimum (at least 2 away) above that already rules out a rival, so
+    most curves are not walked."""
+    height, width, depth = volume.shape
+    for y in prange(height):
+        for x in range(width):
+            out[y, x] = 0
+            inside = min(depth, x + 1)
+            d1 = np.int64(disp[y, x])
+            if d1 < 0 or d1 >= inside:
+                continue
+            spread = mean[y, x] - best[y, x]
+            near = np.float32(level) * (spread + np.float32(floor))
+            if second[y, x] - best[y, x] >= near:
+                continue
+            costs = volume[y, x]
+            rise = np.float32(hump) * spread
+            first, last = max(0, d1 - reach), min(inside, d1 + reach + 1)
+            # The rival's cost first, without branches (most curves have none); where
+            # to find it only for the few that do.
+            rival = min(_lowest_separated(costs, d1, first - 1, -1, rise),
+                        _lowest_separated(costs, d1, last, 1, rise))
+            if rival - costs[d1] < near:
+                out[y, x] = _offset_of(costs, d1, first, last, rise, rival)
+
+
+@njit(inline="always")
+def _lowest_separated(costs, d1, stop, step, rise):
+    """The lowest cost walking from ``d1`` by ``step`` to ``stop`` (excluded) with a rise
+    of at least ``rise`` between it and ``d1``; inf where there is none."""
+    lowest = np.float32(np.inf)
+    peak = costs[d1]
+    for d in range(d1 + step, stop, step):
+        c = costs[d]
+        peak = max(peak, c)
+        lowest = min(lowest, c if peak - c >= rise else np.float32(np.inf))
+    return lowest
+
+
+@njit(inline="always")
+def _offset_of(costs, d1, first, last, rise, rival):
+    """The offset from ``d1`` of the nearest separated candidate of cost ``rival``, on
+    the left if both sides have one (0 if none)."""
+    best_offset = 0
+    for step, stop in ((-1, first - 1), (1, last)):
+        peak = costs[d1]
+        for d in range(d1 + step, stop, step):
+            c = costs[d]
+            peak = max(peak, c)
+            if peak - c >= rise and c == rival:
+                if best_offset == 0:
+                    best_offset = d - d1
+                break
+    return best_offset
+
+
+@njit(**KERNEL_OPTIONS)
+def repeats_at(grey, offset, radius, reach, similar, out):
+    """out[y, x] = 1 where the view repeats itself at the pixel's ``offset`` along its
+    row: over the window of rows +-``radius`` and columns +-min(``reach``, |offset|) (at
+    least +-``radius``),
+    the mean absolute difference between the view and itself shifted by |offset| is below
+    ``similar`` x that at half the shift (a repeat's worst phase; about equal on a texture
+    that does not repeat). 0 elsewhere and where ``offset`` is 0."""
+    height, width = grey.shape
+    for y in prange(height):
+        for x in range(width):
+            out[y, x] = 0.0
+            lag = abs(np.int64(offset[y, x]))
+            if lag == 0:
+                continue
+            half = max(1, lag // 2)
+            columns = max(radius, min(reach, lag))
+            at_lag = 0.0
+            at_half = 0.0
+            for yy in range(max(0, y - radius), min(height, y + radius + 1)):
+                for xx in range(max(lag, x - columns), min(width, x + columns + 1)):
+                    value = grey[yy, xx]
+                    at_lag += abs(value - grey[yy, xx - lag])
+                    at_half += abs(value - grey[yy, xx - half])
+            if at_lag < similar * (at_half + 1.0):
+                out[y, x] = 1.0
