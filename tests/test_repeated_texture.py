@@ -53,6 +53,21 @@ def test_the_view_repeats_itself_at_its_period_only(rng):
         assert np.mean(out[5:-5, 20:-20] == expected) > 0.95, (offset, expected)
 
 
+def test_one_pass_gives_the_curves_and_repeats_of_two(rng):
+    """The scanline's path reads the aggregated curves once for both; the same maps."""
+    pair = fins_pair(8, width=160, height=60)
+    volume = rng.random((60, 160, 24)).astype(np.float32)
+    volume[:, :, 5::8] *= 0.05  # valleys a period apart
+    winners = np.argmin(volume, axis=2).astype(np.int32)
+    grey = pair.left.astype(np.float32)
+    curves, repeated = confidence.curves_and_repeats(volume, winners, grey)
+    for fused, separate in zip(curves, confidence.cost_curves(volume, winners)):
+        np.testing.assert_array_equal(fused, separate)
+    np.testing.assert_array_equal(repeated,
+                                  confidence.repeated_texture(volume, winners, curves, grey))
+    assert repeated.any()
+
+
 def confident_and_wrong(pair, result, name):
     kept = result.confidence >= load_config(name).cloud.min_confidence
     wrong = ~(np.abs(result.disparity - pair.disparity) <= 1)

@@ -32,7 +32,8 @@ from importlib import resources
 import cv2
 import numpy as np
 
-from ._kernels.confidence import cost_curve, logistic, repeats_at, rival_offsets
+from ._kernels.confidence import (cost_curve, cost_curve_and_rivals, logistic, repeats_at,
+                                  rival_offsets)
 from .bands import Bands, of
 from .disparity import VALID, MISMATCHED
 from .images import grey_levels
@@ -122,7 +123,23 @@ def repeated_texture(aggregated: np.ndarray, winners: np.ndarray,
     offsets = np.empty(winners.shape, np.int32)
     rival_offsets(aggregated, np.ascontiguousarray(winners, dtype=np.int32), *curves,
                   RIVAL_HUMP, RIVAL_LEVEL, RIVAL_FLOOR, RIVAL_REACH, offsets)
-    repeated = np.empty(winners.shape, np.float32)
+    return _repeats(grey, offsets)
+
+
+def curves_and_repeats(aggregated: np.ndarray, winners: np.ndarray, grey: np.ndarray
+                       ) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
+    """:func:`cost_curves` of the whole-range ``aggregated`` costs and
+    :func:`repeated_texture`, the curves read once."""
+    curves = tuple(np.empty(winners.shape, np.float32) for _ in range(3))
+    offsets = np.empty(winners.shape, np.int32)
+    cost_curve_and_rivals(aggregated, np.ascontiguousarray(winners, dtype=np.int32), 1,
+                          RIVAL_HUMP, RIVAL_LEVEL, RIVAL_FLOOR, RIVAL_REACH, *curves, offsets)
+    return curves, _repeats(grey, offsets)
+
+
+def _repeats(grey: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """1 where the view repeats itself at each pixel's rival ``offsets`` (float32)."""
+    repeated = np.empty(offsets.shape, np.float32)
     repeats_at(np.ascontiguousarray(grey, dtype=np.float32), offsets, REPEAT_RADIUS,
                REPEAT_REACH, REPEAT_SIMILAR, repeated)
     return repeated

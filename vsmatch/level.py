@@ -107,14 +107,15 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
     if whole_range:
         with stage("confidence"):
             curve = confidence.curve_features(curves, arms_l)
-            raw = curves
-            if aggregated is not volume:  # the same margin before the scanline optimisation
-                raw = confidence.cost_curves(aggregated, disp_l)
+            # The same margin before the scanline optimisation, and repeated texture there.
+            if aggregated is not volume:
+                raw, curve["repeated"] = confidence.curves_and_repeats(aggregated, disp_l,
+                                                                       to_grey(left))
                 curve["raw_margin"] = confidence.curve_features(raw, None)["margin"]
             else:
                 curve["raw_margin"] = curve["margin"]
-            curve["repeated"] = confidence.repeated_texture(aggregated, disp_l, raw,
-                                                            to_grey(left))
+                curve["repeated"] = confidence.repeated_texture(aggregated, disp_l, curves,
+                                                                to_grey(left))
 
     # Pixels searched no more keep the disparity they hold, and count as consistent.
     held = None if bands is None or bands.held is None else np.isfinite(bands.held)

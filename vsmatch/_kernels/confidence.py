@@ -76,35 +76,64 @@ def logistic(features, weights, out):
 
 @njit(**KERNEL_OPTIONS)
 def rival_offsets(volume, disp, best, second, mean, hump, level, floor, reach, out):
-    """Per pixel, the offset (disparities, signed) from the chosen ``disp[y, x]`` to the
-    lowest *separated* rival on its whole-range cost curve ``volume[y, x, :]`` (in-view
-    candidates d <= x, at most ``reach`` from the winner): a candidate with a rise of at
-    least ``hump`` x (mean - best) between it and the winner, so another valley, not the
-    winner's own slope. 0 unless the rival is within ``level`` x (mean - best + ``floor``)
-    of the winner's cost. ``best``, ``second``, ``mean``: the curve's :func:`cost_curve`
-    maps; a second minimum (at least 2 away) above that already rules out a rival, so
-    most curves are not walked."""
+    """Per pixel, :func:`rival_offset` of its whole-range cost curve ``volume[y, x, :]``
+    at the chosen ``disp[y, x]``; ``best``, ``second``, ``mean``: the curve's
+    :func:`cost_curve` maps."""
     height, width, depth = volume.shape
     for y in prange(height):
         for x in range(width):
-            out[y, x] = 0
+            out[y, x] = rival_offset(volume[y, x], disp[y, x], min(depth, x + 1),
+                                     best[y, x], second[y, x], mean[y, x], hump, level,
+                                     floor, reach)
+
+
+@njit(**KERNEL_OPTIONS)
+def cost_curve_and_rivals(volume, disp, exclude, hump, level, floor, reach, out_best,
+                          out_second, out_mean, out_offset):
+    """:func:`cost_curve` over the whole range (no bands) and :func:`rival_offset` in
+    one pass: the curve is walked for a rival while it is in cache."""
+    height, width, depth = volume.shape
+    for y in prange(height):
+        for x in range(width):
             inside = min(depth, x + 1)
             d1 = np.int64(disp[y, x])
-            if d1 < 0 or d1 >= inside:
+            out_offset[y, x] = 0
+            if d1 < 0 or d1 >= depth:  # as cost_curve: a winner out of view has a curve
+                out_best[y, x] = out_second[y, x] = out_mean[y, x] = 0.0
                 continue
-            spread = mean[y, x] - best[y, x]
-            near = np.float32(level) * (spread + np.float32(floor))
-            if second[y, x] - best[y, x] >= near:
-                continue
-            costs = volume[y, x]
-            rise = np.float32(hump) * spread
-            first, last = max(0, d1 - reach), min(inside, d1 + reach + 1)
-            # The rival's cost first, without branches (most curves have none); where
-            # to find it only for the few that do.
-            rival = min(_lowest_separated(costs, d1, first - 1, -1, rise),
-                        _lowest_separated(costs, d1, last, 1, rise))
-            if rival - costs[d1] < near:
-                out[y, x] = _offset_of(costs, d1, first, last, rise, rival)
+            best, second, mean = curve_at(volume[y, x], d1, inside, exclude)
+            out_best[y, x] = best
+            out_second[y, x] = second
+            out_mean[y, x] = mean
+            out_offset[y, x] = rival_offset(volume[y, x], d1, inside, best, second, mean,
+                                            hump, level, floor, reach)
+
+
+@njit(inline="always")
+def rival_offset(costs, d1, inside, best, second, mean, hump, level, floor, reach):
+    """The offset (disparities, signed) from the chosen ``d1`` to the lowest *separated*
+    rival on the cost curve ``costs[:inside]`` (at most ``reach`` from the winner): a
+    candidate with a rise of at least ``hump`` x (mean - best) between it and the winner,
+    so another valley, not the winner's own slope. 0 unless the rival is within
+    ``level`` x (mean - best + ``floor``) of the winner's cost. ``best``, ``second``,
+    ``mean``: the curve's :func:`curve_at`; a second minimum (at least 2 away) above that
+    already rules out a rival, so most curves are not walked."""
+    d1 = np.int64(d1)
+    if d1 < 0 or d1 >= inside:
+        return 0
+    spread = mean - best
+    near = np.float32(level) * (spread + np.float32(floor))
+    if second - best >= near:
+        return 0
+    rise = np.float32(hump) * spread
+    first, last = max(0, d1 - reach), min(inside, d1 + reach + 1)
+    # The rival's cost first, without branches (most curves have none); where to find it
+    # only for the few that do.
+    rival = min(_lowest_separated(costs, d1, first - 1, -1, rise),
+                _lowest_separated(costs, d1, last, 1, rise))
+    if rival - costs[d1] < near:
+        return _offset_of(costs, d1, first, last, rise, rival)
+    return 0
 
 
 @njit(inline="always")
