@@ -94,10 +94,9 @@ def cost_curve_and_rivals(volume, disp, exclude, hump, level, floor, reach, out_
     one pass: the curve is walked for a rival while it is in cache."""
     height, width, depth = volume.shape
     for y in prange(height):
-        for x in range(width):
+        for x in range(width):  # the row's curves, then its rivals (the row still in cache)
             inside = min(depth, x + 1)
             d1 = np.int64(disp[y, x])
-            out_offset[y, x] = 0
             if d1 < 0 or d1 >= depth:  # as cost_curve: a winner out of view has a curve
                 out_best[y, x] = out_second[y, x] = out_mean[y, x] = 0.0
                 continue
@@ -105,8 +104,10 @@ def cost_curve_and_rivals(volume, disp, exclude, hump, level, floor, reach, out_
             out_best[y, x] = best
             out_second[y, x] = second
             out_mean[y, x] = mean
-            out_offset[y, x] = rival_offset(volume[y, x], d1, inside, best, second, mean,
-                                            hump, level, floor, reach)
+        for x in range(width):
+            out_offset[y, x] = rival_offset(volume[y, x], disp[y, x], min(depth, x + 1),
+                                            out_best[y, x], out_second[y, x],
+                                            out_mean[y, x], hump, level, floor, reach)
 
 
 @njit(inline="always")
