@@ -19,6 +19,10 @@ all (:func:`matchability`); its weights are fitted on the developers' data, all 
 together (``python scripts/fit_confidence.py`` re-fits them and writes
 ``vsmatch/confidence_weights.json``). The confidence never changes the disparity.
 
+Repeated texture (fins, fences, tiles) is capped apart: a match a period off has as clear
+a final curve as the right one, so :func:`repeated_texture` looks for another valley of the
+aggregated curve where the left view repeats itself at that offset (:func:`cap_repeated`).
+
 :func:`sparsification` measures a confidence as Hu and Mordohai do: keep the most
 confident 5 %, 10 %, ... 100 % of the pixels and average the error rate of what is kept.
 """
@@ -99,9 +103,11 @@ def curve_features(curves: tuple[np.ndarray, ...],
 
 
 #: Repeated texture (fins, fences, tiles): a pixel whose aggregated cost curve has another
-#: valley (behind a rise of at least RIVAL_HUMP x the curve's mean above its best) within
-#: RIVAL_LEVEL x (mean - best + RIVAL_FLOOR) of the winner's cost, where the left view
-#: repeats itself at that offset (REPEAT_RADIUS, REPEAT_SIMILAR: :func:`repeated_texture`).
+#: valley within RIVAL_REACH disparities (behind a rise of at least RIVAL_HUMP x the
+#: curve's mean above its best) within RIVAL_LEVEL x (mean - best + RIVAL_FLOOR) of the
+#: winner's cost, where the left view repeats itself at that offset (rows +-REPEAT_RADIUS,
+#: columns +-REPEAT_REACH at most; below REPEAT_SIMILAR x the difference at half the
+#: offset: :func:`repeated_texture`).
 #: Measured on synthetic fins of 5-16 px in front of a wall and on the datasets
 #: (docs/confidence.md, "Repeated texture"): the view's test is what tells fins from fine
 #: random texture (KITTI's near road has such rivals on 10-25 % of its confident pixels,
