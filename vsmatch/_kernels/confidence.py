@@ -2,6 +2,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import KERNEL_OPTIONS
+from .rows import dealt_row
 
 
 @njit(inline="always")
@@ -176,7 +177,8 @@ def repeats_at(grey, offset, radius, reach, similar, out):
     ``similar`` x that at half the shift (a repeat's worst phase; about equal on a texture
     that does not repeat). 0 elsewhere and where ``offset`` is 0."""
     height, width = grey.shape
-    for y in prange(height):
+    for i in prange(height):  # rows dealt out: only pixels with a rival are looked at
+        y = dealt_row(i, height)
         for x in range(width):
             out[y, x] = 0.0
             lag = abs(np.int64(offset[y, x]))

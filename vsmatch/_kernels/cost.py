@@ -1,7 +1,7 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS, SERIAL_OPTIONS
+from . import KERNEL_OPTIONS
 from .census import popcount64
 
 
@@ -68,7 +68,7 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
                 costs[d] = max_cost
 
 
-@njit(**SERIAL_OPTIONS)
+@njit(**KERNEL_OPTIONS)
 def view_terms(colour_l, colour_r, census_r, grad_l, grad_r, steps, planes_l, planes_r_rev,
                census_r_rev, q_l, q_r_rev, row_max):
     """What :func:`matching_cost_volume` reads of the views: the colours (H, W, C) as int16
@@ -76,7 +76,7 @@ def view_terms(colour_l, colour_r, census_r, grad_l, grad_r, steps, planes_l, pl
     view's census, gradients and colours reversed along x, and each row's largest
     quantised gradient (``row_max``)."""
     height, width, channels = colour_l.shape
-    for y in range(height):
+    for y in prange(height):
         largest = 0
         for x in range(width):
             xr = width - 1 - x

@@ -2,6 +2,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import KERNEL_OPTIONS
+from .rows import dealt_row
 from .arms import colour_distance
 from .confidence import curve_at
 
@@ -116,7 +117,8 @@ def fill_rejected(disp, labels, image, steps_y, steps_x, max_search, invalid, ou
     the candidate whose colour is closest. A pixel with no candidate gets ``invalid``.
     """
     height, width = disp.shape
-    for y in prange(height):
+    for i in prange(height):  # rows dealt out: only rejected pixels search
+        y = dealt_row(i, height)
         for x in range(width):
             label = labels[y, x]
             if label == VALID:

@@ -2,6 +2,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import KERNEL_OPTIONS
+from .rows import dealt_row
 
 #: Most candidates a pixel weighs: its own disparity and one from each side.
 MAX_CANDIDATES = 3
@@ -28,7 +29,8 @@ def weigh_edge_sides(disp, left, right, grad_l, grad_r, skip, radius, colour_sca
     # is a whole number of grey levels, the distance a whole number of pixels.
     by_colour = np.exp(-np.arange(255 * channels + 1) / channels / colour_scale)
     by_distance = np.exp(-np.arange(2 * radius + 1) / distance_scale)
-    for y in prange(height):
+    for i in prange(height):  # rows dealt out: only pixels near a step weigh their windows
+        y = dealt_row(i, height)
         candidates = np.empty(MAX_CANDIDATES, np.float64)
         totals = np.empty(MAX_CANDIDATES, np.float64)
         for x in range(width):

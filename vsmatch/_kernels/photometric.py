@@ -58,22 +58,22 @@ def matched_colours(left, right, matched, disp, ys, xr, at_left, at_right):
     return i
 
 
-@njit(**SERIAL_OPTIONS)
+@njit(**KERNEL_OPTIONS)
 def corrected_colours(mapped, field, ys, xr, out):
     """out = clip(rint(mapped + field at (ys, xr)), 0, 255) as uint8, (N, channels)."""
     n, channels = mapped.shape
-    for i in range(n):
+    for i in prange(n):
         for c in range(channels):
             v = np.rint(np.float32(mapped[i, c]) + field[ys[i], xr[i], c])
             out[i, c] = np.uint8(min(np.float32(255.0), max(np.float32(0.0), v)))
 
 
-@njit(**SERIAL_OPTIONS)
+@njit(**KERNEL_OPTIONS)
 def map_colours(view, table, field, out):
     """out = clip(rint(table[view] + field), 0, 255) as uint8 for (H, W, C) ``view``,
     ``table`` (256, C) and float32 ``field`` (H, W, C)."""
     height, width, channels = view.shape
-    for y in range(height):
+    for y in prange(height):
         for x in range(width):
             for c in range(channels):
                 v = np.rint(np.float32(table[view[y, x, c], c]) + field[y, x, c])

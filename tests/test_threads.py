@@ -1,0 +1,51 @@
+"""Work shared between threads: the same bytes at any thread count, and the helpers that
+deal the work out."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+import pytest
+
+from vsmatch import datasets, pipeline
+from vsmatch._kernels.rows import CLASSES, dealt_row
+from vsmatch.bench import thread_count
+from vsmatch.images import upsample_nearest
+
+
+@pytest.mark.parametrize("height", [*range(1, 3 * CLASSES + 2), 375, 496, 1001])
+def test_dealt_rows_visit_every_row_once(height):
+    rows = [dealt_row(i, height) for i in range(height)]
+    assert sorted(rows) == list(range(height))
+    if height >= 2 * CLASSES:  # each half of the iterations reaches the whole height
+        half = height // 2
+        for part in (rows[:half], rows[half:]):
+            assert min(part) < CLASSES and max(part) >= height - CLASSES
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.int16, np.int32, np.float32, np.float64,
+                                   np.bool_, np.int64])
+@pytest.mark.parametrize("lead", [(), (4,), (2, 3)])
+def test_upsample_nearest_takes_each_coarse_pixel(dtype, lead):
+    coarse = (np.random.default_rng(0).random(lead + (19, 23)) * 100).astype(dtype)
+    for shape in ((38, 46), (37, 45), (38, 45), (10, 12), (30, 40)):
+        rows = np.minimum(np.arange(shape[0]) // 2, coarse.shape[-2] - 1)
+        cols = np.minimum(np.arange(shape[1]) // 2, coarse.shape[-1] - 1)
+        fine = upsample_nearest(coarse, shape)
+        assert fine.dtype == coarse.dtype and fine.flags.c_contiguous
+        np.testing.assert_array_equal(fine, coarse[..., rows[:, None], cols[None, :]])
+
+
+@pytest.mark.data
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs two threads")
+@pytest.mark.parametrize("config", ["fast", "default", "accurate"])
+def test_every_config_gives_the_same_bytes_on_one_thread_and_two(data_dir, config):
+    """The kernels whose rows are dealt out (edges, filling, repeats) and the rest."""
+    scene = datasets.load_dataset("middlebury2", data_dir, names=["cones"])[0]
+    results = []
+    for threads in (1, 2):
+        with thread_count(threads):
+            result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp,
+                                  config=config)
+        results.append((result.disparity.tobytes(), result.confidence.tobytes()))
+    assert results[0] == results[1]
