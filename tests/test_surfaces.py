@@ -278,3 +278,41 @@ def test_a_board_running_out_of_the_views_bottom_takes_the_level_disparity_above
     assert np.all(np.isnan(_bottom_edge_extension(sure, unsure, reach=19)[:, 3]))  # too far
     sure[39 - EDGE_LEVEL_ROWS, 3] = np.nan  # no sure pixel to tell the column is level
     assert np.all(np.isnan(_bottom_edge_extension(sure, unsure, reach=24)[:, 3]))
+
+
+def _bridges_by_numpy(sure, unsure, span, agree):
+    """The bridges along columns as whole-array NumPy steps (the kernel's reference)."""
+    height, width = sure.shape
+    rows = np.arange(height)[:, None]
+    known = np.isfinite(sure)
+    above = np.maximum.accumulate(np.where(known, rows, -1), axis=0)
+    below = np.minimum.accumulate(np.where(known, rows, height)[::-1], axis=0)[::-1]
+    ends = unsure & (above >= 0) & (below < height) & (below - above <= span)
+    columns = np.arange(width)[None, :]
+    top = sure[np.clip(above, 0, height - 1), columns]
+    bottom = sure[np.clip(below, 0, height - 1), columns]
+    with np.errstate(invalid="ignore"):
+        ends &= np.abs(top - bottom) <= np.float32(agree)
+        share = (rows - above) / np.maximum(below - above, 1)
+        return np.where(ends, top + share * (bottom - top), np.nan).astype(np.float32)
+
+
+def test_bridges_kernel_equals_the_numpy_steps_along_columns_and_rows():
+    from vsmatch.surfaces import _column_bridges
+
+    rng = np.random.default_rng(3)
+    drawn = 0
+    for _ in range(12):
+        height, width = rng.integers(1, 120, 2)
+        sure = (rng.random((height, width)) * 60).astype(np.float32)
+        sure[rng.random((height, width)) < rng.random()] = np.nan
+        unsure = rng.random((height, width)) < 0.5
+        for span, agree in ((16, 1.0), (48, 0.3), (3, 2.5)):
+            expected = _bridges_by_numpy(sure, unsure, span, agree)
+            assert np.array_equal(_column_bridges(sure, unsure, span, agree), expected,
+                                  equal_nan=True)
+            across = _bridges_by_numpy(sure.T, unsure.T, span, agree).T
+            assert np.array_equal(_column_bridges(sure, unsure, span, agree, along_rows=True),
+                                  across, equal_nan=True)
+            drawn += np.isfinite(expected).sum()
+    assert drawn > 1000  # the cases hold bridges, not only NaN

@@ -40,6 +40,7 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
+from ._kernels.bridges import bridges_along
 from .aggregation import arms_grown_below
 from .bands import Bands
 from .config import ArmsConfig, Config, SurfacesConfig
@@ -186,7 +187,7 @@ def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float,
     apart and differ by at most ``agree``; failing that, the same along its row; failing
     that, with ``edge`` > 0, :func:`_bottom_edge_extension` (NaN where none holds)."""
     bridged = _column_bridges(sure, unsure, span, agree)
-    along_rows = _column_bridges(sure.T, unsure.T, span, agree).T
+    along_rows = _column_bridges(sure, unsure, span, agree, along_rows=True)
     bridged = np.where(np.isfinite(bridged), bridged, along_rows)
     if edge > 0:
         bridged = np.where(np.isfinite(bridged), bridged,
@@ -194,23 +195,13 @@ def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float,
     return bridged
 
 
-def _column_bridges(sure: np.ndarray, unsure: np.ndarray, span: int,
-                    agree: float) -> np.ndarray:
-    """:func:`_bridges` along the columns only."""
-    height, width = sure.shape
-    rows = np.arange(height, dtype=np.int32)[:, None]  # int32: a camera-size pair's maps
-    known = np.isfinite(sure)
-    # The row of the nearest sure pixel above (at or before) and below each pixel.
-    above = np.maximum.accumulate(np.where(known, rows, np.int32(-1)), axis=0)
-    below = np.minimum.accumulate(np.where(known, rows, np.int32(height))[::-1], axis=0)[::-1]
-    ends = unsure & (above >= 0) & (below < height) & (below - above <= span)
-    columns = np.arange(width, dtype=np.int32)[None, :]
-    top = sure[np.clip(above, 0, height - 1), columns]
-    bottom = sure[np.clip(below, 0, height - 1), columns]
-    with np.errstate(invalid="ignore"):
-        ends &= np.abs(top - bottom) <= agree
-        share = (rows - above) / np.maximum(below - above, 1)
-        return np.where(ends, top + share * (bottom - top), np.nan).astype(np.float32)
+def _column_bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float,
+                    along_rows: bool = False) -> np.ndarray:
+    """:func:`_bridges` along the columns only (``along_rows``: the rows only)."""
+    out = np.empty(sure.shape, np.float32)
+    bridges_along(np.ascontiguousarray(sure, dtype=np.float32), np.ascontiguousarray(unsure),
+                  int(span), np.float32(agree), int(along_rows), out)
+    return out
 
 
 #: The column's sure disparities :func:`_bottom_edge_extension` compares: the nearest one
