@@ -49,7 +49,7 @@ def test_the_view_repeats_itself_at_its_period_only(rng):
     for image, offset, expected in ((stripes, period, 1.0), (stripes, -2 * period, 1.0),
                                     (random, period, 0.0), (stripes, 0, 0.0)):
         repeats_at(image, np.full((30, 120), offset, np.int32), confidence.REPEAT_RADIUS,
-                   confidence.REPEAT_REACH, confidence.REPEAT_SIMILAR, out)
+                   confidence.REPEAT_REACH, confidence.REPEAT_SIMILAR, 2, out)
         assert np.mean(out[5:-5, 20:-20] == expected) > 0.95, (offset, expected)
 
 

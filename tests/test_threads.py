@@ -8,19 +8,25 @@ import numpy as np
 import pytest
 
 from vsmatch import datasets, pipeline
-from vsmatch._kernels.rows import CLASSES, dealt_row
+from vsmatch._kernels.rows import dealt
 from vsmatch.bench import thread_count
 from vsmatch.images import upsample_nearest
 
 
-@pytest.mark.parametrize("height", [*range(1, 3 * CLASSES + 2), 375, 496, 1001])
-def test_dealt_rows_visit_every_row_once(height):
-    rows = [dealt_row(i, height) for i in range(height)]
-    assert sorted(rows) == list(range(height))
-    if height >= 2 * CLASSES:  # each half of the iterations reaches the whole height
-        half = height // 2
-        for part in (rows[:half], rows[half:]):
-            assert min(part) < CLASSES and max(part) >= height - CLASSES
+@pytest.mark.parametrize("classes", [1, 2, 3, 16])
+@pytest.mark.parametrize("count", [*range(1, 40), 375, 496, 1001])
+def test_dealt_items_are_each_taken_once_and_each_thread_reaches_the_whole_height(count,
+                                                                                  classes):
+    items = [dealt(i, count, classes) for i in range(count)]
+    assert sorted(items) == list(range(count))
+    if classes == 1:
+        assert items == list(range(count))  # one thread: in order
+    elif count >= 4 * classes:  # each class, a thread's share: top to bottom in steps
+        sizes = [count // classes + (k < count % classes) for k in range(classes)]
+        for k, first in enumerate(np.cumsum([0] + sizes[:-1])):
+            part = items[first:first + sizes[k]]
+            assert part[0] == k and part[-1] >= count - classes
+            assert np.all(np.diff(part) == classes)
 
 
 @pytest.mark.parametrize("dtype", [np.uint8, np.int16, np.int32, np.float32, np.float64,

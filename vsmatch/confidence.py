@@ -36,6 +36,7 @@ from importlib import resources
 import cv2
 import numpy as np
 
+from ._kernels.rows import thread_classes
 from ._kernels.confidence import (cost_curve, cost_curve_and_rivals, logistic, repeats_at,
                                   rival_offsets)
 from .bands import Bands, of
@@ -147,7 +148,7 @@ def _repeats(grey: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """1 where the view repeats itself at each pixel's rival ``offsets`` (float32)."""
     repeated = np.empty(offsets.shape, np.float32)
     repeats_at(np.ascontiguousarray(grey, dtype=np.float32), offsets, REPEAT_RADIUS,
-               REPEAT_REACH, REPEAT_SIMILAR, repeated)
+               REPEAT_REACH, REPEAT_SIMILAR, thread_classes(), repeated)
     return repeated
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._kernels import disparity as _k
+from ._kernels.rows import thread_classes
 from .bands import Bands, of
 from .config import FillConfig
 from .images import as_channels
@@ -87,7 +88,7 @@ def fill_rejected(disp: np.ndarray, labels: np.ndarray, image: np.ndarray,
     out = np.empty(disp.shape, dtype=np.float32)
     _k.fill_rejected(np.ascontiguousarray(disp, dtype=np.float32), labels,
                      as_channels(image), steps_y, steps_x, int(cfg.max_search),
-                     INVALID_DISPARITY, out)
+                     INVALID_DISPARITY, thread_classes(), out)
     return out
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._kernels.edges import weigh_edge_sides
+from ._kernels.rows import thread_classes
 from .config import EdgesConfig
 from .images import as_channels, grey_levels
 from .sensitivity import sobel, texture
@@ -63,5 +64,5 @@ def _weigh_block(disp: np.ndarray, left: np.ndarray, right: np.ndarray,
     weigh_edge_sides(np.ascontiguousarray(disp), as_channels(left), as_channels(right),
                      grad_l, grad_r, skip, cfg.radius, cfg.colour_scale, cfg.distance_scale,
                      cfg.gradient_share, cfg.colour_cap, cfg.gradient_cap, cfg.reach,
-                     cfg.jump, cfg.margin, out)
+                     cfg.jump, cfg.margin, thread_classes(), out)
     return out

@@ -6,6 +6,7 @@ import cv2
 import numpy as np
 
 from ._kernels import refine as _k
+from ._kernels.rows import thread_classes
 from .bands import Bands, of
 from .config import DiscontinuityConfig, VotingConfig
 
@@ -23,7 +24,7 @@ def region_vote(disp: np.ndarray, labels: np.ndarray, arms: np.ndarray, *, n_dis
     for _ in range(cfg.iterations):
         _k.vote_runs(disp, labels, votes, run_end)
         _k.region_vote(disp, labels, votes, run_end, arms, int(n_disp), int(cfg.min_votes),
-                       float(cfg.min_share), next_disp, next_labels)
+                       float(cfg.min_share), thread_classes(), next_disp, next_labels)
         disp, next_disp = next_disp, disp
         labels, next_labels = next_labels, labels
     return disp, labels

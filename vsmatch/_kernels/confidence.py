@@ -2,7 +2,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import KERNEL_OPTIONS
-from .rows import dealt_row
+from .rows import dealt
 
 
 @njit(inline="always")
@@ -169,7 +169,7 @@ def _offset_of(costs, d1, first, last, rise, rival):
 
 
 @njit(**KERNEL_OPTIONS)
-def repeats_at(grey, offset, radius, reach, similar, out):
+def repeats_at(grey, offset, radius, reach, similar, classes, out):
     """out[y, x] = 1 where the view repeats itself at the pixel's ``offset`` along its
     row: over the window of rows +-``radius`` and columns +-min(``reach``, |offset|) (at
     least +-``radius``),
@@ -178,7 +178,7 @@ def repeats_at(grey, offset, radius, reach, similar, out):
     that does not repeat). 0 elsewhere and where ``offset`` is 0."""
     height, width = grey.shape
     for i in prange(height):  # rows dealt out: only pixels with a rival are looked at
-        y = dealt_row(i, height)
+        y = dealt(i, height, classes)
         for x in range(width):
             out[y, x] = 0.0
             lag = abs(np.int64(offset[y, x]))

@@ -2,7 +2,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import KERNEL_OPTIONS
-from .rows import dealt_row
+from .rows import dealt
 from .arms import colour_distance
 from .confidence import curve_at
 
@@ -110,7 +110,7 @@ def left_right_check(disp_l, disp_r, n_disp, tolerance, labels):
 
 
 @njit(**KERNEL_OPTIONS)
-def fill_rejected(disp, labels, image, steps_y, steps_x, max_search, invalid, out):
+def fill_rejected(disp, labels, image, steps_y, steps_x, max_search, invalid, classes, out):
     """Fill every non-VALID pixel from the first VALID pixel found along each direction.
 
     Occluded pixels take the lowest candidate (the background); mismatched pixels take
@@ -118,7 +118,7 @@ def fill_rejected(disp, labels, image, steps_y, steps_x, max_search, invalid, ou
     """
     height, width = disp.shape
     for i in prange(height):  # rows dealt out: only rejected pixels search
-        y = dealt_row(i, height)
+        y = dealt(i, height, classes)
         for x in range(width):
             label = labels[y, x]
             if label == VALID:

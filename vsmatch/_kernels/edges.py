@@ -2,7 +2,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import KERNEL_OPTIONS
-from .rows import dealt_row
+from .rows import dealt
 
 #: Most candidates a pixel weighs: its own disparity and one from each side.
 MAX_CANDIDATES = 3
@@ -11,7 +11,7 @@ MAX_CANDIDATES = 3
 @njit(**KERNEL_OPTIONS)
 def weigh_edge_sides(disp, left, right, grad_l, grad_r, skip, radius, colour_scale,
                      distance_scale, gradient_share, colour_cap, gradient_cap, reach, jump,
-                     margin, out):
+                     margin, classes, out):
     """``out[y, x]``: the disparity of ``disp`` at the pixel, or that of the nearest pixel
     within ``reach`` along its row on either side that lies more than ``jump`` behind it
     (a smaller disparity), whichever explains the views best over the pixel's window of
@@ -30,7 +30,7 @@ def weigh_edge_sides(disp, left, right, grad_l, grad_r, skip, radius, colour_sca
     by_colour = np.exp(-np.arange(255 * channels + 1) / channels / colour_scale)
     by_distance = np.exp(-np.arange(2 * radius + 1) / distance_scale)
     for i in prange(height):  # rows dealt out: only pixels near a step weigh their windows
-        y = dealt_row(i, height)
+        y = dealt(i, height, classes)
         candidates = np.empty(MAX_CANDIDATES, np.float64)
         totals = np.empty(MAX_CANDIDATES, np.float64)
         for x in range(width):

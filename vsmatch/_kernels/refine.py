@@ -4,6 +4,7 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS
 from .arms import DOWN, LEFT, RIGHT, UP
 from .disparity import VALID
+from .rows import BLOCK_ROWS, dealt
 
 
 @njit(**KERNEL_OPTIONS)
@@ -21,8 +22,8 @@ def vote_runs(disp, labels, votes, run_end):
 
 
 @njit(**KERNEL_OPTIONS)
-def region_vote(disp, labels, votes, run_end, arms, n_disp, min_votes, min_share, out_disp,
-                out_labels):
+def region_vote(disp, labels, votes, run_end, arms, n_disp, min_votes, min_share, classes,
+                out_disp, out_labels):
     """One round of region voting (Mei et al. 2011).
 
     A rejected pixel takes the most frequent disparity among the VALID pixels of its cross
@@ -32,34 +33,38 @@ def region_vote(disp, labels, votes, run_end, arms, n_disp, min_votes, min_share
     by pixel. Reads the inputs only, so the result is the same on any thread count.
     """
     height, width = disp.shape
-    for y in prange(height):
+    # Blocks of rows dealt out: only rejected pixels vote, and they gather (occlusions).
+    n_blocks = (height + BLOCK_ROWS - 1) // BLOCK_ROWS
+    for block in prange(n_blocks):
+        top = dealt(block, n_blocks, classes) * BLOCK_ROWS
         hist = np.zeros(n_disp, dtype=np.int32)
-        for x in range(width):
-            out_disp[y, x] = disp[y, x]
-            out_labels[y, x] = labels[y, x]
-            if labels[y, x] == VALID:
-                continue
-            hist[:] = 0
-            total = 0
-            for yy in range(y - np.int64(arms[UP, y, x]), y + np.int64(arms[DOWN, y, x]) + 1):
-                xx = x - np.int64(arms[LEFT, yy, x])
-                stop = x + np.int64(arms[RIGHT, yy, x]) + 1
-                while xx < stop:
-                    end = min(np.int64(run_end[yy, xx]), stop)
-                    vote = votes[yy, xx]
-                    if vote >= 0:
-                        hist[vote] += end - xx
-                        total += end - xx
-                    xx = end
-            if total <= min_votes:
-                continue
-            best = 0
-            for d in range(1, n_disp):
-                if hist[d] > hist[best]:
-                    best = d
-            if hist[best] > min_share * total:
-                out_disp[y, x] = best
-                out_labels[y, x] = VALID
+        for y in range(top, min(height, top + BLOCK_ROWS)):
+            for x in range(width):
+                out_disp[y, x] = disp[y, x]
+                out_labels[y, x] = labels[y, x]
+                if labels[y, x] == VALID:
+                    continue
+                hist[:] = 0
+                total = 0
+                for yy in range(y - np.int64(arms[UP, y, x]), y + np.int64(arms[DOWN, y, x]) + 1):
+                    xx = x - np.int64(arms[LEFT, yy, x])
+                    stop = x + np.int64(arms[RIGHT, yy, x]) + 1
+                    while xx < stop:
+                        end = min(np.int64(run_end[yy, xx]), stop)
+                        vote = votes[yy, xx]
+                        if vote >= 0:
+                            hist[vote] += end - xx
+                            total += end - xx
+                        xx = end
+                if total <= min_votes:
+                    continue
+                best = 0
+                for d in range(1, n_disp):
+                    if hist[d] > hist[best]:
+                        best = d
+                if hist[best] > min_share * total:
+                    out_disp[y, x] = best
+                    out_labels[y, x] = VALID
 
 
 @njit(**KERNEL_OPTIONS)

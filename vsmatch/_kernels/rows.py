@@ -1,26 +1,34 @@
+import numba
 from numba import njit
 
-#: Classes :func:`dealt_row` deals out: rows y and y + CLASSES are in one class.
-CLASSES = 16
+#: Rows in a block that :func:`dealt` deals out as one, where neighbouring rows read the
+#: same rows (region voting's vertical arms).
+BLOCK_ROWS = 4
+
+
+def thread_classes() -> int:
+    """The classes a kernel deals its rows into: the threads it runs on, passed in (a
+    kernel that asked Numba itself could not be cached)."""
+    return numba.get_num_threads()
 
 
 @njit(inline="always")
-def dealt_row(i, count):
-    """The row that iteration ``i`` of a ``prange(count)`` over rows works on: the rows
-    dealt out in :data:`CLASSES` classes (y modulo that), one class after another.
+def dealt(i, count, classes):
+    """The item (a row, or a block of rows) that iteration ``i`` of a ``prange(count)``
+    works on: the items dealt out into ``classes`` classes (item modulo ``classes``), one
+    class after another; kernels deal into as many classes as they have threads
+    (:func:`thread_classes`).
 
     Numba gives each thread one run of consecutive iterations; where a row's work depends
-    on what the image holds there (near depth edges, in blank regions), runs of
-    consecutive rows leave one thread working while the others wait. Dealt out, every
-    thread's run holds rows from the whole height (a kernel over Middlebury's edges: 1.63
-    -> 2.0x from one thread to two). Each row is still worked on by one iteration, so
-    the result is the same. Not for kernels whose neighbouring rows read the same rows
-    and whose work is even (one thread's rows far apart lose the cache: region voting
-    took 1.2x the time on one thread, no less on two)."""
-    per = count // CLASSES
-    longer = count % CLASSES  # the first classes hold one row more
+    on what the image holds there (near depth edges, around rejected pixels), runs of
+    consecutive rows leave one thread working while the others wait. Dealt out, thread t
+    of n takes items t, t + n, t + 2n, ...: rows from the whole height, near the rows its
+    neighbours take at the same time (they share the cache), and on one thread the rows
+    in order. Each item is still worked on by one iteration, so the result is the same."""
+    per = count // classes
+    longer = count % classes  # the first classes hold one item more
     first = longer * (per + 1)
     if i < first:
-        return (i % (per + 1)) * CLASSES + i // (per + 1)
+        return (i % (per + 1)) * classes + i // (per + 1)
     rest = i - first
-    return (rest % per) * CLASSES + longer + rest // per
+    return (rest % per) * classes + longer + rest // per
