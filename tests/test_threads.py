@@ -55,3 +55,62 @@ def test_every_config_gives_the_same_bytes_on_one_thread_and_two(data_dir, confi
                                   config=config)
         results.append((result.disparity.tobytes(), result.confidence.tobytes()))
     assert results[0] == results[1]
+
+
+def test_a_match_runs_opencv_on_its_own_thread_and_sets_the_count_back(monkeypatch):
+    import cv2
+
+    from vsmatch import confidence, synthetic
+
+    seen = []
+    original = confidence.confidence_map
+
+    def watched(*args, **kwargs):
+        seen.append(cv2.getNumThreads())
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(confidence, "confidence_map", watched)
+    pair = synthetic.make_pair(width=96, height=64)
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    try:
+        pipeline.run(pair.left, pair.right, max_disp=pair.max_disp, config="fast")
+        assert seen == [1] and cv2.getNumThreads() == 2
+    finally:
+        cv2.setNumThreads(before)
+
+
+def test_overlapping_blocks_set_opencv_back_when_the_last_one_ends():
+    import threading
+
+    import cv2
+
+    from vsmatch.threads import opencv_on_this_thread
+
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    first_in, second_in, first_out = threading.Event(), threading.Event(), threading.Event()
+    inside = []
+
+    def first():
+        with opencv_on_this_thread():
+            first_in.set()
+            second_in.wait(5)
+        first_out.set()
+
+    def second():
+        first_in.wait(5)
+        with opencv_on_this_thread():
+            second_in.set()
+            first_out.wait(5)
+            inside.append(cv2.getNumThreads())  # the first has ended, this one has not
+
+    try:
+        threads = [threading.Thread(target=first), threading.Thread(target=second)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join(10)
+        assert inside == [1] and cv2.getNumThreads() == 2
+    finally:
+        cv2.setNumThreads(before)

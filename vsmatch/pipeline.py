@@ -21,6 +21,7 @@ from .images import downsample, to_grey, upsample_nearest
 from .level import solve
 from .result import Learnt, MatchResult, learn, timed
 from .temporal import Temporal
+from .threads import opencv_on_this_thread
 
 
 def match(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0,
@@ -40,8 +41,9 @@ def run(left: np.ndarray, right: np.ndarray, *, max_disp: int, min_disp: int = 0
     check_pair(left, right, max_disp, cfg, min_disp)
     if temporal is not None:
         temporal.follow(left, right, min_disp, max_disp)
-    return scale.with_offset(functools.partial(_run_from_zero, cfg=cfg, temporal=temporal),
-                             left, right, min_disp, max_disp)
+    with opencv_on_this_thread():
+        return scale.with_offset(functools.partial(_run_from_zero, cfg=cfg, temporal=temporal),
+                                 left, right, min_disp, max_disp)
 
 
 def _run_from_zero(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
