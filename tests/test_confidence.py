@@ -259,3 +259,52 @@ def test_a_pixel_without_texture_stays_out_of_the_cloud(lowest_cloud_threshold):
     assert np.all(conf[:, :15] == np.float32(confidence.TEXTURELESS_CONFIDENCE))
     assert confidence.TEXTURELESS_CONFIDENCE < lowest_cloud_threshold
     assert np.all(conf[:, 25:35] == np.float32(0.99))
+
+
+def _pixel_features_by_numpy(disparity, labels, left, curve):
+    """:func:`confidence.pixel_features` as whole-array NumPy steps (the kernel's
+    reference)."""
+    from vsmatch.disparity import MISMATCHED, VALID
+    from vsmatch.images import grey_levels
+    from vsmatch.sensitivity import texture
+
+    shape = disparity.shape
+    out = np.empty((len(confidence.FEATURES),) + shape, np.float32)
+    row = {name: out[k] for k, name in enumerate(confidence.FEATURES)}
+    row["bias"].fill(1.0)
+    np.clip(curve["margin"], 0, 1, out=row["margin"])
+    np.multiply(row["margin"], row["margin"], out=row["margin_sq"])
+    np.clip(curve["below_mean"], 0, 1, out=row["below_mean"])
+    np.clip(curve["raw_margin"], 0, 1, out=row["raw_margin"])
+    row["support"][:] = curve["support"]
+    valid = np.ones(shape, bool) if labels is None else labels == VALID
+    row["valid"][:] = valid
+    row["mismatched"][:] = False if labels is None else labels == MISMATCHED
+    confidence.log1p_into(confidence._distance_to(valid), row["fill_distance"])
+    confidence.log1p_into(texture(grey_levels(left)), row["texture"])
+    finite = np.where(np.isfinite(disparity), disparity, 0).astype(np.float32)
+    jumps = np.zeros(shape, bool)
+    jumps[:, 1:] |= np.abs(np.diff(finite, axis=1)) > 1
+    jumps[1:, :] |= np.abs(np.diff(finite, axis=0)) > 1
+    confidence.log1p_into(confidence._distance_to(jumps), row["jump_distance"])
+    inside = np.arange(shape[1], dtype=np.float32)[None, :] - finite
+    confidence.log1p_into(np.clip(inside, 0, confidence.MAX_DISTANCE), row["view_edge"])
+    return out
+
+
+@pytest.mark.parametrize("with_labels", [True, False])
+def test_pixel_features_kernel_equals_the_numpy_steps(with_labels):
+    rng = np.random.default_rng(5)
+    shape = (41, 57)
+    disparity = (rng.random(shape) * 30).astype(np.float32)
+    disparity[rng.random(shape) < 0.1] = np.inf
+    disparity[rng.random(shape) < 0.05] = np.nan
+    disparity[10:20, 5:30] = 12.0  # a flat patch: no jumps inside it
+    labels = rng.integers(0, 3, shape).astype(np.uint8) if with_labels else None
+    curve = {name: (rng.random(shape) * 1.6 - 0.3).astype(np.float32)
+             for name in ("margin", "below_mean", "raw_margin", "support")}
+    curve["margin"][0, :5] = np.nan
+    left = (rng.random(shape + (3,)) * 255).astype(np.uint8)
+    expected = _pixel_features_by_numpy(disparity, labels, left, curve)
+    got = confidence.pixel_features(disparity, labels, left, curve)
+    assert got.tobytes() == expected.tobytes()

@@ -37,8 +37,8 @@ import cv2
 import numpy as np
 
 from ._kernels.rows import thread_classes
-from ._kernels.confidence import (cost_curve, cost_curve_and_rivals, logistic, repeats_at,
-                                  rival_offsets)
+from ._kernels.confidence import (cost_curve, cost_curve_and_rivals, logistic, pixel_terms,
+                                  repeats_at, rival_offsets)
 from .bands import Bands, of
 from .disparity import VALID, MISMATCHED
 from .images import grey_levels
@@ -159,25 +159,22 @@ def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
     out = np.empty((len(FEATURES),) + shape, np.float32)
     row = {name: out[k] for k, name in enumerate(FEATURES)}
     row["bias"].fill(1.0)
-    np.clip(curve["margin"], 0, 1, out=row["margin"])
-    np.multiply(row["margin"], row["margin"], out=row["margin_sq"])
-    np.clip(curve["below_mean"], 0, 1, out=row["below_mean"])
-    np.clip(curve["raw_margin"], 0, 1, out=row["raw_margin"])
-    row["support"][:] = curve["support"]
-    valid = np.ones(shape, bool) if labels is None else labels == VALID
-    row["valid"][:] = valid
-    row["mismatched"][:] = False if labels is None else labels == MISMATCHED
-    log1p_into(_distance_to(valid), row["fill_distance"])
-    log1p_into(texture(grey_levels(left)), row["texture"])
-    finite = np.where(np.isfinite(disparity), disparity, 0).astype(np.float32)
-    jumps = np.zeros(shape, bool)
-    jumps[:, 1:] |= np.abs(np.diff(finite, axis=1)) > 1
-    jumps[1:, :] |= np.abs(np.diff(finite, axis=0)) > 1
-    log1p_into(_distance_to(jumps), row["jump_distance"])
+    jumps = np.empty(shape, bool)
     # How far inside the right view the match lies (near its left edge, little of the
     # support region has a partner).
-    inside = np.arange(shape[1], dtype=np.float32)[None, :] - finite
-    log1p_into(np.clip(inside, 0, MAX_DISTANCE), row["view_edge"])
+    inside = np.empty(shape, np.float32)
+    no_labels = np.empty((0, 0), np.uint8)
+    pixel_terms(*(np.ascontiguousarray(curve[name], dtype=np.float32)
+                  for name in ("margin", "below_mean", "raw_margin", "support")),
+                no_labels if labels is None else np.ascontiguousarray(labels, np.uint8),
+                VALID, MISMATCHED, np.ascontiguousarray(disparity, dtype=np.float32),
+                np.float32(MAX_DISTANCE), row["margin"], row["margin_sq"], row["below_mean"],
+                row["raw_margin"], row["support"], row["valid"], row["mismatched"], jumps,
+                inside)
+    log1p_into(_distance_to(row["valid"] > 0), row["fill_distance"])
+    log1p_into(texture(grey_levels(left)), row["texture"])
+    log1p_into(_distance_to(jumps), row["jump_distance"])
+    log1p_into(inside, row["view_edge"])
     return out
 
 

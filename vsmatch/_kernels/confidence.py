@@ -195,3 +195,49 @@ def repeats_at(grey, offset, radius, reach, similar, classes, out):
                     at_half += abs(value - grey[yy, xx - half])
             if at_lag < similar * (at_half + 1.0):
                 out[y, x] = 1.0
+
+
+@njit(inline="always")
+def _unit(value):
+    """``value`` clipped to 0 .. 1, NaN kept (as ``np.clip``)."""
+    if value > 1:
+        return np.float32(1.0)
+    if value < 0:
+        return np.float32(0.0)
+    return value
+
+
+@njit(**KERNEL_OPTIONS)
+def pixel_terms(margin, below_mean, raw_margin, support, labels, valid, mismatched, disparity,
+                max_distance, out_margin, out_margin_sq, out_below_mean, out_raw_margin,
+                out_support, out_valid, out_mismatched, jumps, inside):
+    """The features a pixel's own values give, in one pass: the margins clipped to 0 .. 1
+    (and the first squared), the support copied, VALID and MISMATCHED from ``labels`` (an
+    empty array: every pixel valid), and for the distance features: ``jumps`` where the
+    disparity (0 where not finite) changes by more than 1 from the pixel left of or above
+    it, ``inside`` = x - that disparity clipped to 0 .. ``max_distance``. ``valid``,
+    ``mismatched``: the labels' values (``vsmatch.disparity``'s)."""
+    height, width = disparity.shape
+    labelled = labels.shape[0] > 0
+    for y in prange(height):
+        for x in range(width):
+            m = _unit(margin[y, x])
+            out_margin[y, x] = m
+            out_margin_sq[y, x] = m * m
+            out_below_mean[y, x] = _unit(below_mean[y, x])
+            out_raw_margin[y, x] = _unit(raw_margin[y, x])
+            out_support[y, x] = support[y, x]
+            out_valid[y, x] = 1.0 if not labelled or labels[y, x] == valid else 0.0
+            out_mismatched[y, x] = 1.0 if labelled and labels[y, x] == mismatched else 0.0
+            d = disparity[y, x]
+            here = d if np.isfinite(d) else np.float32(0.0)
+            step = False
+            if x > 0:
+                left = disparity[y, x - 1]
+                step = abs(here - (left if np.isfinite(left) else np.float32(0.0))) > 1
+            if y > 0:
+                up = disparity[y - 1, x]
+                step = step or abs(here - (up if np.isfinite(up) else np.float32(0.0))) > 1
+            jumps[y, x] = step
+            room = np.float32(x) - here
+            inside[y, x] = min(max(room, np.float32(0.0)), max_distance)
