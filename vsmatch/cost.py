@@ -107,8 +107,13 @@ def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,
     term weighted by ``colour_weight`` besides ``cost.ad_weight``."""
     if bands is None:
         bands = Bands.full(census_l.shape, n_disp)
-    out = volumes.volume("cost", census_l.shape + (bands.width,))
-    matching_cost_volume(*cost_terms(colour_l, colour_r, census_l, census_r, grad_l, grad_r,
-                                     cfg, colour_weight=colour_weight),
-                         bands.lo, bands.count, out)
+    return banded_volume(cost_terms(colour_l, colour_r, census_l, census_r, grad_l, grad_r,
+                                    cfg, colour_weight=colour_weight), bands)
+
+
+def banded_volume(terms: tuple, bands: Bands) -> np.ndarray:
+    """The cost volume ``(H, W, B)`` of ``bands``' candidates from the views' prepared
+    :func:`cost_terms` (made once where several bands are costed on one pair)."""
+    out = volumes.volume("cost", bands.lo.shape + (bands.width,))
+    matching_cost_volume(*terms, bands.lo, bands.count, out)
     return out

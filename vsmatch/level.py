@@ -36,6 +36,18 @@ def matching_costs(left: np.ndarray, right: np.ndarray, n_disp: int, cost_cfg: C
     return volume, sens_l, sens_r
 
 
+def pair_cost_terms(left: np.ndarray, right: np.ndarray, cost_cfg: CostConfig,
+                    colour_weight: float = 1.0) -> tuple:
+    """What :func:`matching_costs` prepares of the views (``cost.cost_terms``), for
+    costing several sets of bands on one pair (``cost.banded_volume``)."""
+    grey_l, grey_r = to_grey(left), to_grey(right)
+    grad_l = sensitivity.visual_sensitivity(grey_l, False)[0]
+    grad_r = sensitivity.visual_sensitivity(grey_r, False)[0]
+    return cost.cost_terms(left, right, cost.census_for(grey_l, cost_cfg),
+                           cost.census_for(grey_r, cost_cfg), grad_l, grad_r, cost_cfg,
+                           colour_weight=colour_weight)
+
+
 def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
           bands: Bands | None = None, learnt: Learnt | None = None) -> MatchResult:
     """One level's solver: the stages in order (ALGORITHM.md §1-5), every pixel searching

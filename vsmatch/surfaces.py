@@ -46,7 +46,8 @@ from .bands import Bands
 from .config import ArmsConfig, Config, SurfacesConfig
 from .disparity import VALID
 from .images import grey_levels
-from .level import matching_costs
+from .cost import banded_volume
+from .level import pair_cost_terms
 from .planes import region_planes
 from .segments import blank_segments, bounding_box, edge_plane, segment_mask
 from .sensitivity import texture
@@ -86,12 +87,14 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier)
     take = close & was_unsure
     # The found disparities' window cost, computed once and only when a check needs it.
+    # The views' census and gradients, made once for every cost taken below.
+    terms = functools.cache(lambda: pair_cost_terms(left, right, cfg.cost, colour_weight))
     found_cost = functools.cache(
-        lambda: _window_cost(left, right, disp, max_disp, cfg, colour_weight))
+        lambda: _window_cost(terms(), disp, max_disp, cfg.surfaces.window))
 
     def no_worse(proposed: np.ndarray, tolerance: float) -> np.ndarray:
         """Where ``proposed``'s window cost is at most ``tolerance`` above the match's."""
-        cost = _window_cost(left, right, proposed, max_disp, cfg, colour_weight)
+        cost = _window_cost(terms(), proposed, max_disp, cfg.surfaces.window)
         with np.errstate(invalid="ignore"):
             return cost <= found_cost() + tolerance
 
@@ -258,19 +261,17 @@ def _wide_arms(arms: ArmsConfig, s: SurfacesConfig, contrast: float,
                                tau3=tau if long else arms.tau3, kappa=0.0, shrink=False)
 
 
-def _window_cost(left: np.ndarray, right: np.ndarray, disp: np.ndarray, max_disp: int,
-                 cfg: Config, colour_weight: float) -> np.ndarray:
-    """The matching cost (census, gradient, colour) of each pixel at its rounded disparity
-    in ``disp``, averaged over the ``surfaces.window`` square around it (over the pixels
-    with a disparity)."""
+def _window_cost(terms: tuple, disp: np.ndarray, max_disp: int, window: int) -> np.ndarray:
+    """The matching cost (census, gradient, colour; ``terms``: the pair's prepared
+    ``cost.cost_terms``) of each pixel at its rounded disparity in ``disp``, averaged over
+    the ``window`` square around it (over the pixels with a disparity)."""
     n_disp = max_disp + 1
     known = np.isfinite(disp)
     lo = np.clip(np.rint(np.where(known, disp, 0)), 0, max_disp).astype(np.int32)
     bands = Bands(lo, known.astype(np.int32), 1, n_disp)
-    volume, _, _ = matching_costs(left, right, n_disp, cfg.cost, direction=False, bands=bands,
-                                  colour_weight=colour_weight)
+    volume = banded_volume(terms, bands)
     cost = np.where(known, volume[:, :, 0], 0).astype(np.float32)
-    box = (cfg.surfaces.window, cfg.surfaces.window)
+    box = (window, window)
     total = cv2.blur(cost, box)
     count = cv2.blur(known.astype(np.float32), box)
     with np.errstate(invalid="ignore", divide="ignore"):
