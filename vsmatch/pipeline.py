@@ -184,8 +184,8 @@ def _fit_planes(result: MatchResult, left: np.ndarray, max_disp: int) -> None:
                                                  adapted.arms, adapted.planes)
     # A disparity outside the searched range is no estimate: a sub-pixel fit at the
     # range's end or a plane's fill stops at the end (the confidence marks such pixels).
-    finite = np.isfinite(result.disparity)
-    result.disparity[finite] = np.clip(result.disparity[finite], 0, max_disp)
+    np.clip(result.disparity, 0, max_disp, out=result.disparity,
+            where=np.isfinite(result.disparity))
 
 
 def _with_confidence(result: MatchResult, left: np.ndarray, max_disp: int) -> MatchResult:

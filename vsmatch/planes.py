@@ -19,7 +19,7 @@ import dataclasses
 import numpy as np
 
 from ._kernels.planes import (N_MOMENTS, cut_arms_at_jumps, plane_moments, plane_values,
-                              region_sums)
+                              region_sums, take_planes)
 from .aggregation import keep_arms_inside
 from .config import ArmsConfig, PlanesConfig
 from .disparity import VALID
@@ -49,18 +49,14 @@ def fit_planes(disp: np.ndarray, labels: np.ndarray, left: np.ndarray,
     if cfg.jump > 0:
         cut_arms_at_jumps(arms, np.where(kept, disp, np.float32(np.nan)),
                           np.float32(cfg.jump))
-    out = disp.copy()
+    out = np.empty_like(disp)
     for top, bottom, y0, y1 in row_blocks(disp.shape[0], PLANE_ROWS, cfg.l2):
         plane, spread = _block_planes(disp[y0:y1], kept[y0:y1],
                                       np.ascontiguousarray(arms[:, y0:y1]), cfg)
         core = slice(top - y0, bottom - y0)
-        block, plane, spread, block_kept = (a[core] for a in (disp[y0:y1], plane, spread,
-                                                             kept[y0:y1]))
-        with np.errstate(invalid="ignore"):
-            fitted = np.isfinite(plane) & (spread <= cfg.max_spread)
-            near = np.abs(block - plane) <= cfg.snap
-        take = fitted & ((~block_kept & cfg.fill) | near)
-        out[top:bottom][take] = plane[take]
+        take_planes(disp[top:bottom], kept[top:bottom], plane[core], spread[core],
+                    np.float32(cfg.max_spread), np.float32(cfg.snap), bool(cfg.fill),
+                    out[top:bottom])
     return out
 
 
@@ -85,12 +81,13 @@ def region_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, iteratio
     scratch = np.empty_like(moments)
     plane = np.empty(disp.shape, np.float32)
     spread = np.empty(disp.shape, np.float32)
-    for _ in range(iterations):
+    for fit in range(iterations):
+        if fit > 0:  # the next fit: the kept pixels near the last plane
+            with np.errstate(invalid="ignore"):
+                weight = (kept & (np.abs(disp - plane) <= inlier)).astype(np.float32)
         plane_moments(disp, weight, moments)
         # The region sums go back into the moments' array (44 bytes a pixel less): its
         # rows are all read into the row sums before the column pass writes a sum.
         region_sums(moments, arms, scratch, moments)
         plane_values(moments, np.float32(min_share), np.float32(MIN_SPREAD), plane, spread)
-        with np.errstate(invalid="ignore"):
-            weight = (kept & (np.abs(disp - plane) <= inlier)).astype(np.float32)
     return plane, spread

@@ -9,6 +9,21 @@ N_MOMENTS = 11
 
 
 @njit(**KERNEL_OPTIONS)
+def take_planes(disp, kept, plane, spread, max_spread, snap, fill, out):
+    """``out[y, x]``: the ``plane``'s value where it fits (finite, its region's ``spread``
+    at most ``max_spread``) and the pixel is not ``kept`` (with ``fill``) or lies within
+    ``snap`` of it; ``disp`` elsewhere."""
+    height, width = disp.shape
+    for y in prange(height):
+        for x in range(width):
+            p = plane[y, x]
+            d = disp[y, x]
+            fitted = np.isfinite(p) and spread[y, x] <= max_spread
+            take = fitted and ((fill and not kept[y, x]) or abs(d - p) <= snap)
+            out[y, x] = p if take else d
+
+
+@njit(**KERNEL_OPTIONS)
 def plane_moments(disp, weight, out):
     """``out[y, x]`` = w (1, u, v, u^2, u v, v^2, d, u d, v d) with u, v the pixel's
     coordinates from the image centre, w = ``weight[y, x]`` (0 where the disparity is not
