@@ -352,6 +352,10 @@ class BandsConfig:
     max_band: int = _param(8, 3, 4096, doc=(
         "Most candidates a pixel keeps at a finer level; a wider 3 × 3 range is cut to "
         "this many around the pixel's own estimate."))
+    guide: float | None = _param(None, 0.0, 255.0, nullable=True, doc=(
+        "Where the 3 × 3 range is cut: around the estimate of the coarse neighbour whose grey "
+        "level is nearest the pixel's, the pixel's own unless another is nearer by more than "
+        "this (grey levels); null: always its own."))
 
 
 @dataclass(frozen=True)

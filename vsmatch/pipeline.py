@@ -154,12 +154,12 @@ def _coarse_look(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
     other rows), and its cost-curve features at this size over those rows."""
     first, stop = rows
     _, coarse_max = pyramid.level_down(left.shape[1], max_disp)
-    coarse = scale.in_stripes(functools.partial(solve, learnt=learnt),
-                              downsample(left[first:stop]), downsample(right[first:stop]),
-                              coarse_max, cfg)
+    small_l = downsample(left[first:stop])
+    coarse = scale.in_stripes(functools.partial(solve, learnt=learnt), small_l,
+                              downsample(right[first:stop]), coarse_max, cfg)
     shape = (stop - first, left.shape[1])
     bands = pyramid.bands_from_coarse(coarse.disparity, coarse.labels, shape, max_disp,
-                                      cfg.bands)
+                                      cfg.bands, views=(left[first:stop], small_l))
     curve = None if coarse.curve is None else {
         name: upsample_nearest(values, shape) for name, values in coarse.curve.items()}
     return bands.placed(first, left.shape[0]), curve

@@ -21,7 +21,8 @@ from . import bands
 from .bands import Bands
 from .config import BandsConfig
 from .disparity import VALID
-from .images import upsample_nearest
+from ._kernels.bands import centre_on_likest
+from .images import to_grey, upsample_nearest
 
 #: Disparities the level below must keep for ``pyramid.min_levels`` to go down to it.
 MIN_FORCED_DISPARITIES = 10
@@ -74,11 +75,14 @@ def coarse_extremes(coarse: np.ndarray, coarse_labels: np.ndarray | None
 
 
 def bands_from_coarse(coarse: np.ndarray, coarse_labels: np.ndarray | None,
-                      shape: tuple[int, int], max_disp: int, cfg: BandsConfig) -> Bands:
+                      shape: tuple[int, int], max_disp: int, cfg: BandsConfig,
+                      views: tuple[np.ndarray, np.ndarray] | None = None) -> Bands:
     """Each pixel's candidates at this level from the disparity one level down: twice the
     smallest to twice the largest of its coarse 3 x 3 neighbourhood (:func:`coarse_extremes`),
     widened by ``band`` and one more each side (the sub-pixel fit's neighbours), at most
-    ``max_band`` of them around twice its own coarse disparity; none where the coarse
+    ``max_band`` of them around twice its own coarse disparity (with ``guide`` and the
+    ``views``, this level's left view and the one below, around that of the coarse
+    neighbour most like the pixel: :func:`_centre_on_likest`); none where the coarse
     level has no estimate."""
     low, high = coarse_extremes(coarse, coarse_labels)
     widen = cfg.band + 1
@@ -87,5 +91,33 @@ def bands_from_coarse(coarse: np.ndarray, coarse_labels: np.ndarray | None,
     with np.errstate(invalid="ignore"):
         small = bands.around(2 * low - widen, 2 * high + widen, 2 * coarse, max_disp + 1,
                              cfg.max_band)
-    return bands.Bands(upsample_nearest(small.lo, shape), upsample_nearest(small.count, shape),
-                       small.width, small.n_disp)
+    found = bands.Bands(upsample_nearest(small.lo, shape), upsample_nearest(small.count, shape),
+                        small.width, small.n_disp)
+    if cfg.guide is not None and views is not None:
+        _centre_on_likest(found, coarse, coarse_labels, low, high, widen, views, cfg.guide)
+    return found
+
+
+def _centre_on_likest(found: Bands, coarse: np.ndarray, coarse_labels: np.ndarray | None,
+                      low: np.ndarray, high: np.ndarray, widen: int,
+                      views: tuple[np.ndarray, np.ndarray], guide: float) -> None:
+    """Where a coarse pixel's 3 x 3 range is wider than a band, its fine pixels' bands (in
+    ``found``, in place) centred on the coarse neighbour whose grey level is nearest each
+    one's, the pixel's own unless another is nearer by more than ``guide``. At a depth
+    edge the coarse pixel mixes both surfaces; centred on its own estimate, the fine
+    pixels beside a thin object could only take the object's disparity (``fast`` drew a
+    synthetic wire 3 px wide 1.47x its width, 1.15x with this)."""
+    n_disp = found.n_disp
+    with np.errstate(invalid="ignore"):
+        first = np.clip(np.floor(2 * low - widen), 0, n_disp - 1)
+        last = np.clip(np.ceil(2 * high + widen), 0, n_disp - 1)
+        wide = np.isfinite(first) & np.isfinite(last) & (last - first + 1 > found.width)
+    if not wide.any():
+        return
+    usable = np.isfinite(coarse)
+    if coarse_labels is not None:
+        usable &= coarse_labels == VALID
+    fine, small = (to_grey(view) for view in views)
+    centre_on_likest(np.ascontiguousarray(coarse, dtype=np.float32), usable, small, fine,
+                     wide, np.float32(guide), int(found.width), int(n_disp), found.lo,
+                     found.count)

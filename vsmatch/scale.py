@@ -117,7 +117,7 @@ def coarse_to_fine(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp:
     coarse = coarse_to_fine(solve, small_l, small_r, coarse_max, cfg, levels - 1)
     with timed(coarse.seconds, "bands"):
         bands = pyramid.bands_from_coarse(coarse.disparity, coarse.labels, left.shape[:2],
-                                          max_disp, cfg.bands)
+                                          max_disp, cfg.bands, views=(left, small_l))
     result = in_stripes(solve, left, right, max_disp, cfg, bands)
     seconds = dict(coarse.seconds)
     for name, value in result.seconds.items():

@@ -115,3 +115,37 @@ def fins_pair(period: int = 12, width: int = 480, height: int = 360, wall: float
     hidden = (xs >= x0 - (fins - wall)) & (xs < x0)  # wall the panel hides from the right
     nonocc[rows, hidden] = False
     return SyntheticPair(views[0], views[1], disparity, nonocc, int(np.ceil(max(wall, fins))) + 16)
+
+
+def wires_pair(thickness: int = 3, spacing: int = 40, width: int = 480, height: int = 360,
+               wall: float = 20.0, wires: float = 40.0, noise: float = 1.0,
+               seed: int = 0) -> SyntheticPair:
+    """Thin structures: vertical wires ``thickness`` px wide every ``spacing`` px, bright
+    and finely textured, at disparity ``wires`` in front of a randomly textured wall at
+    ``wall`` (grey, each view with its own sensor noise of ``noise`` grey levels). A
+    matcher that fattens them draws them wider than ``thickness``."""
+    rng = np.random.default_rng(seed)
+    margin = int(np.ceil(max(wall, wires))) + 2
+    columns = np.arange(width + 2 * margin, dtype=np.float32) - margin  # surface u
+    texture, wire_texture = (
+        cv2.GaussianBlur(rng.random((height, columns.size), dtype=np.float32), (0, 0), blur)
+        for blur in (1.2, 1.0))
+    texture = 110 + 30 * (texture - texture.min()) / float(texture.max() - texture.min())
+    wire_texture = 200 + 40 * ((wire_texture - wire_texture.min())
+                               / float(wire_texture.max() - wire_texture.min()))
+    on = (((columns - 20) % spacing) < thickness) & (columns >= 60) & (columns < width - 40)
+    xs = np.arange(width, dtype=np.float32)
+    views = []
+    for shift in (0.0, 1.0):  # left view, right view: a point at u shows at x = u - shift d
+        image = np.stack([np.interp(xs + shift * wall, columns, row) for row in texture])
+        u = xs + shift * wires
+        shown = on[np.clip(np.floor(u + margin).astype(int), 0, columns.size - 1)]
+        image[:, shown] = np.stack([np.interp(u, columns, row)
+                                    for row in wire_texture])[:, shown]
+        image += rng.normal(0.0, noise, image.shape)
+        views.append(np.clip(np.round(image), 0, 255).astype(np.uint8))
+    wire = on[np.clip(np.floor(xs + margin).astype(int), 0, columns.size - 1)]
+    disparity = np.where(np.repeat(wire[None, :], height, 0), wires, wall).astype(np.float32)
+    nonocc = xs[None, :] >= disparity
+    return SyntheticPair(views[0], views[1], disparity, nonocc,
+                         int(np.ceil(max(wall, wires))) + 24)
