@@ -116,31 +116,6 @@ def test_overlapping_blocks_set_opencv_back_when_the_last_one_ends():
         cv2.setNumThreads(before)
 
 
-@pytest.mark.parametrize("shape", [(5, 7), (4, 30, 41), (1, 1)])
-@pytest.mark.parametrize("pad, fill", [(0, 0), (9, 255), (3, 1)])
-def test_mirrored_maps_by_the_kernel_equal_numpys_flip(shape, pad, fill):
-    from vsmatch.images import mirrored
-
-    array = np.random.default_rng(0).integers(0, 255, shape).astype(np.uint8)
-    out = mirrored(array, pad=pad, fill=fill)
-    expected = np.concatenate([np.flip(array, -1),
-                               np.full(shape[:-1] + (pad,), fill, np.uint8)], axis=-1)
-    assert out.flags.c_contiguous and out.dtype == np.uint8
-    np.testing.assert_array_equal(out, expected)
-
-
-def test_gradient_kernels_give_numpys_float32_bytes():
-    from vsmatch._kernels.views import gradient_magnitude, gradient_sum
-
-    rng = np.random.default_rng(1)
-    gx, gy = ((rng.normal(0, 300, (37, 53))).astype(np.float32) for _ in range(2))
-    magnitude, total = np.empty_like(gx), np.empty_like(gx)
-    gradient_magnitude(gx, gy, magnitude)
-    gradient_sum(gx, gy, total)
-    assert magnitude.tobytes() == np.sqrt(gx * gx + gy * gy).tobytes()
-    assert total.tobytes() == (np.abs(gx) + np.abs(gy)).tobytes()
-
-
 def test_planes_are_taken_where_numpys_masks_take_them():
     from vsmatch._kernels.planes import take_planes
 

@@ -6,7 +6,6 @@ import cv2
 import numpy as np
 
 from ._kernels.arms import colour_change as colour_change_kernel
-from ._kernels.views import mirror_rows
 
 
 def to_grey(image: np.ndarray) -> np.ndarray:
@@ -45,12 +44,6 @@ def mirrored(array: np.ndarray, *, axis: int = -1, pad: int = 0, fill: int = 0) 
     ``width - 1 - x + d``, lies forward in memory, and the padding stands for x - d < 0.
     """
     axis = axis % array.ndim
-    if array.dtype == np.uint8 and axis == array.ndim - 1 and array.ndim in (2, 3):
-        # The kernels' maps and arms: one parallel pass.
-        src = np.ascontiguousarray(array).reshape((-1,) + array.shape[-2:])
-        out = np.empty(src.shape[:2] + (src.shape[2] + pad,), np.uint8)
-        mirror_rows(src, np.uint8(fill), out)
-        return out.reshape(array.shape[:-1] + (out.shape[-1],))
     shape = list(array.shape)
     shape[axis] += pad
     out = np.empty(shape, dtype=array.dtype)  # each entry written once

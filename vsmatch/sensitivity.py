@@ -5,8 +5,6 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ._kernels.views import gradient_magnitude, gradient_sum
-
 
 def presmooth(image: np.ndarray, sigma: float) -> np.ndarray:
     """Gaussian blur of a view before all stages (same dtype); sigma 0 leaves it as is."""
@@ -27,9 +25,7 @@ def visual_sensitivity(grey: np.ndarray, direction: bool = True
     """
     gx, gy = sobel(np.ascontiguousarray(grey, dtype=np.float32))
     theta = np.arctan2(gy, gx).astype(np.float32) if direction else None
-    magnitude = np.empty_like(gx)
-    gradient_magnitude(gx, gy, magnitude)
-    return magnitude, theta
+    return np.sqrt(gx * gx + gy * gy), theta
 
 
 #: The square (pixels) :func:`texture` averages the gradient over.
@@ -41,9 +37,7 @@ def texture(grey: np.ndarray) -> np.ndarray:
     averaged over a :data:`TEXTURE_WINDOW` square (float32; 8 for a gradient of one grey
     level a pixel)."""
     gx, gy = sobel(grey)
-    total = np.empty_like(gx)
-    gradient_sum(gx, gy, total)
-    return cv2.blur(total, (TEXTURE_WINDOW, TEXTURE_WINDOW))
+    return cv2.blur(np.abs(gx) + np.abs(gy), (TEXTURE_WINDOW, TEXTURE_WINDOW))
 
 
 def sobel(grey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,20 +1,20 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS
+from . import KERNEL_OPTIONS, SERIAL_OPTIONS
 
 #: Channels of the moments volume: weight, then weight times u, v, u^2, u v, v^2, d, u d, v d,
 #: d^2, and 1 (summed over a region: its pixel count).
 N_MOMENTS = 11
 
 
-@njit(**KERNEL_OPTIONS)
+@njit(**SERIAL_OPTIONS)
 def take_planes(disp, kept, plane, spread, max_spread, snap, fill, out):
     """``out[y, x]``: the ``plane``'s value where it fits (finite, its region's ``spread``
     at most ``max_spread``) and the pixel is not ``kept`` (with ``fill``) or lies within
     ``snap`` of it; ``disp`` elsewhere."""
     height, width = disp.shape
-    for y in prange(height):
+    for y in range(height):
         for x in range(width):
             p = plane[y, x]
             d = disp[y, x]
