@@ -298,7 +298,7 @@ def _bridges_by_numpy(sure, unsure, span, agree):
 
 
 def test_bridges_kernel_equals_the_numpy_steps_along_columns_and_rows():
-    from vsmatch.surfaces import _column_bridges
+    from vsmatch.surfaces import _line_bridges
 
     rng = np.random.default_rng(3)
     drawn = 0
@@ -309,10 +309,10 @@ def test_bridges_kernel_equals_the_numpy_steps_along_columns_and_rows():
         unsure = rng.random((height, width)) < 0.5
         for span, agree in ((16, 1.0), (48, 0.3), (3, 2.5)):
             expected = _bridges_by_numpy(sure, unsure, span, agree)
-            assert np.array_equal(_column_bridges(sure, unsure, span, agree), expected,
+            assert np.array_equal(_line_bridges(sure, unsure, span, agree, False), expected,
                                   equal_nan=True)
             across = _bridges_by_numpy(sure.T, unsure.T, span, agree).T
-            assert np.array_equal(_column_bridges(sure, unsure, span, agree, along_rows=True),
+            assert np.array_equal(_line_bridges(sure, unsure, span, agree, True),
                                   across, equal_nan=True)
             drawn += np.isfinite(expected).sum()
     assert drawn > 1000  # the cases hold bridges, not only NaN

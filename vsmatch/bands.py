@@ -70,17 +70,20 @@ def extremes(disparity: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
     return low, high
 
 
+def held(low: np.ndarray, high: np.ndarray, n_disp: int) -> tuple[np.ndarray, np.ndarray]:
+    """The first candidate and the count of ``low .. high`` (float arrays, per pixel;
+    rounded outwards) within the range ``0 .. n_disp - 1`` (float arrays)."""
+    lo = np.clip(np.floor(low), 0, n_disp - 1)
+    return lo, np.clip(np.ceil(high), 0, n_disp - 1) - lo + 1
+
+
 def around(low: np.ndarray, high: np.ndarray, centre: np.ndarray, n_disp: int,
            width: int) -> Bands:
     """Bands holding ``low .. high`` (float arrays, per pixel; rounded outwards) within the
     range ``0 .. n_disp - 1``; where that is more than ``width`` candidates, the ``width``
     centred on ``centre``; none where ``low``, ``high`` or ``centre`` is not finite."""
     known = np.isfinite(low) & np.isfinite(high) & np.isfinite(centre)
-    low = np.where(known, low, 0)
-    high = np.where(known, high, 0)
-    lo = np.clip(np.floor(low), 0, n_disp - 1)
-    hi = np.clip(np.ceil(high), 0, n_disp - 1)
-    count = hi - lo + 1
+    lo, count = held(np.where(known, low, 0), np.where(known, high, 0), n_disp)
     wide = count > width
     middle = np.round(np.where(known, centre, 0)) - width // 2
     lo = np.where(wide, np.clip(middle, 0, max(n_disp - width, 0)), lo)

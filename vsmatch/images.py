@@ -61,6 +61,11 @@ def downsample(image: np.ndarray) -> np.ndarray:
     return cv2.pyrDown(image)
 
 
+#: The types OpenCV resizes (others go through NumPy).
+_RESIZABLE = tuple(np.dtype(t) for t in (np.uint8, np.int16, np.uint16, np.int32, np.float32,
+                                         np.float64))
+
+
 def upsample_nearest(array: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     """Each fine pixel (y, x) takes coarse pixel (y // 2, x // 2) (the last coarse row
     and column where the fine size is odd beyond them), over the last two axes of
@@ -82,8 +87,3 @@ def upsample_nearest(array: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
         doubled = doubled.reshape(array.shape[:-2] + doubled.shape[-2:])
         return np.ascontiguousarray(doubled[..., :shape[0], :shape[1]])
     return array[..., rows[:, None], cols[None, :]]
-
-
-#: The types OpenCV resizes (others go through NumPy).
-_RESIZABLE = tuple(np.dtype(t) for t in (np.uint8, np.int16, np.uint16, np.int32, np.float32,
-                                         np.float64))

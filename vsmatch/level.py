@@ -26,11 +26,8 @@ def matching_costs(left: np.ndarray, right: np.ndarray, n_disp: int, cost_cfg: C
                     colour_weight: float = 1.0) -> tuple[np.ndarray, tuple, tuple]:
     """The cost volume (ALGORITHM.md §1-2) and each view's gradient magnitude and
     direction (None unless ``direction``), which the arms need too."""
-    grey_l, grey_r = to_grey(left), to_grey(right)
-    sens_l = sensitivity.visual_sensitivity(grey_l, direction)
-    sens_r = sensitivity.visual_sensitivity(grey_r, direction)
-    volume = cost.cost_volume(left, right, cost.census_for(grey_l, cost_cfg),
-                              cost.census_for(grey_r, cost_cfg), sens_l[0], sens_r[0],
+    (census_l, census_r), sens_l, sens_r = _views_measured(left, right, cost_cfg, direction)
+    volume = cost.cost_volume(left, right, census_l, census_r, sens_l[0], sens_r[0],
                               n_disp=n_disp, cfg=cost_cfg, bands=bands,
                               colour_weight=colour_weight)
     return volume, sens_l, sens_r
@@ -40,12 +37,20 @@ def pair_cost_terms(left: np.ndarray, right: np.ndarray, cost_cfg: CostConfig,
                     colour_weight: float = 1.0) -> tuple:
     """What :func:`matching_costs` prepares of the views (``cost.cost_terms``), for
     costing several sets of bands on one pair (``cost.banded_volume``)."""
-    grey_l, grey_r = to_grey(left), to_grey(right)
-    grad_l = sensitivity.visual_sensitivity(grey_l, False)[0]
-    grad_r = sensitivity.visual_sensitivity(grey_r, False)[0]
-    return cost.cost_terms(left, right, cost.census_for(grey_l, cost_cfg),
-                           cost.census_for(grey_r, cost_cfg), grad_l, grad_r, cost_cfg,
+    (census_l, census_r), (grad_l, _), (grad_r, _) = _views_measured(left, right, cost_cfg,
+                                                                     False)
+    return cost.cost_terms(left, right, census_l, census_r, grad_l, grad_r, cost_cfg,
                            colour_weight=colour_weight)
+
+
+def _views_measured(left: np.ndarray, right: np.ndarray, cost_cfg: CostConfig,
+                    direction: bool) -> tuple[tuple, tuple, tuple]:
+    """Each view's census, and its gradient magnitude and direction (None unless
+    ``direction``)."""
+    grey_l, grey_r = to_grey(left), to_grey(right)
+    return ((cost.census_for(grey_l, cost_cfg), cost.census_for(grey_r, cost_cfg)),
+            sensitivity.visual_sensitivity(grey_l, direction),
+            sensitivity.visual_sensitivity(grey_r, direction))
 
 
 def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,

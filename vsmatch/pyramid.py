@@ -108,10 +108,8 @@ def _centre_on_likest(found: Bands, coarse: np.ndarray, coarse_labels: np.ndarra
     pixels beside a thin object could only take the object's disparity (``fast`` drew a
     synthetic wire 3 px wide 1.47x its width, 1.15x with this)."""
     n_disp = found.n_disp
-    with np.errstate(invalid="ignore"):
-        first = np.clip(np.floor(2 * low - widen), 0, n_disp - 1)
-        last = np.clip(np.ceil(2 * high + widen), 0, n_disp - 1)
-        wide = np.isfinite(first) & np.isfinite(last) & (last - first + 1 > found.width)
+    # The range bands.around cut to the band's width (low, high: inf, -inf where none).
+    wide = bands.held(2 * low - widen, 2 * high + widen, n_disp)[1] > found.width
     if not wide.any():
         return
     usable = np.isfinite(coarse)

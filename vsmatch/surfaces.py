@@ -86,9 +86,9 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     was_unsure = (confidence < _shrunk(s.take, contrast, s.take_contrast)) | flat
     plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier)
     take = close & was_unsure
-    # The found disparities' window cost, computed once and only when a check needs it.
     # The views' census and gradients, made once for every cost taken below.
     terms = functools.cache(lambda: pair_cost_terms(left, right, cfg.cost, colour_weight))
+    # The found disparities' window cost, computed once and only when a check needs it.
     found_cost = functools.cache(
         lambda: _window_cost(terms(), disp, max_disp, cfg.surfaces.window))
 
@@ -189,8 +189,8 @@ def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float,
     elsewhere) above and below it in its column, where they are at most ``span`` rows
     apart and differ by at most ``agree``; failing that, the same along its row; failing
     that, with ``edge`` > 0, :func:`_bottom_edge_extension` (NaN where none holds)."""
-    bridged = _column_bridges(sure, unsure, span, agree)
-    along_rows = _column_bridges(sure, unsure, span, agree, along_rows=True)
+    bridged = _line_bridges(sure, unsure, span, agree, along_rows=False)
+    along_rows = _line_bridges(sure, unsure, span, agree, along_rows=True)
     bridged = np.where(np.isfinite(bridged), bridged, along_rows)
     if edge > 0:
         bridged = np.where(np.isfinite(bridged), bridged,
@@ -198,8 +198,8 @@ def _bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float,
     return bridged
 
 
-def _column_bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float,
-                    along_rows: bool = False) -> np.ndarray:
+def _line_bridges(sure: np.ndarray, unsure: np.ndarray, span: int, agree: float,
+                  along_rows: bool) -> np.ndarray:
     """:func:`_bridges` along the columns only (``along_rows``: the rows only)."""
     out = np.empty(sure.shape, np.float32)
     bridges_along(np.ascontiguousarray(sure, dtype=np.float32), np.ascontiguousarray(unsure),
