@@ -2,6 +2,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import KERNEL_OPTIONS
+from .lanes import LANES, path_step_lanes
 
 
 @njit(inline="always")
@@ -76,9 +77,6 @@ def _path_steps(write, lanes):
 
     return first_step, next_step
 
-
-#: Candidates a narrow band's path step takes at once: one vector of float32.
-LANES = 8
 
 @njit(inline="always")
 def _rebase(prev, tmp, off, n_prev, n):
@@ -309,15 +307,13 @@ def _diagonal_kernel(banded):
 
 @njit(inline="always")
 def _lanes_step(cost, out, y, x, ey, ex, n, base, prev_lo, prev_n, m, started, prev, cur,
-                cur_bits, tmp, bits, change_l, change_r_rev, p1s, p2s, weight):
+                tmp, change_l, change_r_rev, p1s, p2s, weight):
     """One pixel's step of a path over a band of ``n`` <= LANES candidates from ``base`` in
     a volume LANES deep, adding ``weight`` x its path costs to ``out``; returns the path's
     minimum. The steps of ``_walk_band_add`` for such a band, the same sums in the same
-    order, without the bookkeeping of wider bands and volumes. ``prev``: the previous
-    pixel's path costs (band ``prev_lo``, ``prev_n``; ``started`` False: none). A copy of
-    :func:`_path_steps`' lanes steps that indexes the volumes rather than taking a pixel's
-    views: calling those steps here cost a third of the gain (cones' bands, 2 threads: rows
-    5.8 against 4.2 ms, columns 6.5 against 5.2)."""
+    order, as one vector (``_kernels.lanes``) and without the bookkeeping of wider bands
+    and volumes. ``prev``: the previous pixel's path costs (band ``prev_lo``, ``prev_n``;
+    ``started`` False: none)."""
     inf = np.float32(np.inf)
     if not started:  # the path starts: its cost is the matching cost
         new_min = inf
@@ -335,20 +331,11 @@ def _lanes_step(cost, out, y, x, ey, ex, n, base, prev_lo, prev_n, m, started, p
         cl = change_l[ey, ex]
         start = cost.shape[1] - 1 - ex + base  # change_r_rev's column of disparity base
         p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
-        for d in range(LANES):
-            c = change_r_rev[ey, start + d]
-            v = cost[y, x, d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - m
-            v = v if d < n else inf
-            cur[d + 1] = v
-            out[y, x, d] += weight * v
-        smallest = cur_bits[1]
-        for d in range(LANES):
-            b = cur_bits[d + 1]
-            smallest = b if b < smallest else smallest
-        bits[0] = smallest
-        new_min = bits.view(np.float32)[0]
+        new_min = path_step_lanes(cost, out, (y * cost.shape[1] + x) * LANES, prev, cur,
+                                  change_r_rev, ey * change_r_rev.shape[1] + start,
+                                  p1a, p1b, p2a, p2b, m, weight, n)
+    # Lanes from ``n`` on are infinite already: only the ends are set.
     cur[0] = inf
-    cur[n + 1] = inf
     cur[LANES + 1] = inf
     return new_min
 
@@ -360,9 +347,7 @@ def rows_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, o
     height, width, depth = cost.shape
     for y in prange(height):
         paths = np.full((2, LANES + 2), np.inf, dtype=np.float32)
-        path_bits = paths.view(np.int32)
         tmp = np.empty(LANES + 2, dtype=np.float32)
-        bits = np.empty(1, dtype=np.int32)
         out[y] = np.float32(0.0)  # both walks add
         for direction in (1, -1):
             start = 0 if direction == 1 else width - 1
@@ -378,8 +363,8 @@ def rows_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, o
                 ex = x if direction == 1 else x + 1  # the edge crossed, at the later pixel
                 base = np.int64(lo[y, x])
                 m = _lanes_step(cost, out, y, x, y, ex, n, base, prev_lo, prev_n, m, started,
-                                paths[1 - now], paths[now], path_bits[now], tmp, bits,
-                                change_l, change_r_rev, p1s, p2s, weight)
+                                paths[1 - now], paths[now], tmp, change_l, change_r_rev, p1s,
+                                p2s, weight)
                 started = True
                 prev_lo, prev_n = base, n
 
@@ -396,7 +381,6 @@ def columns_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight
         prev = np.full((n_cols, LANES + 2), np.inf, dtype=np.float32)
         cur = np.full((n_cols, LANES + 2), np.inf, dtype=np.float32)
         tmp = np.empty(LANES + 2, dtype=np.float32)
-        bits = np.empty(1, dtype=np.int32)
         prev_lo = np.zeros(n_cols, dtype=np.int64)
         prev_n = np.zeros(n_cols, dtype=np.int64)
         started = np.zeros(n_cols, dtype=np.bool_)
@@ -406,7 +390,6 @@ def columns_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight
             for step in range(height):
                 y = step if direction == 1 else height - 1 - step
                 ey = y if direction == 1 else y + 1  # the edge crossed, at the later row
-                cur_bits = cur.view(np.int32)
                 for k in range(n_cols):
                     x = x0 + k
                     n = np.int64(count[y, x])
@@ -415,9 +398,8 @@ def columns_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight
                         continue
                     base = np.int64(lo[y, x])
                     mins[k] = _lanes_step(cost, out, y, x, ey, x, n, base, prev_lo[k],
-                                          prev_n[k], mins[k], started[k], prev[k], cur[k],
-                                          cur_bits[k], tmp, bits, change_l, change_r_rev, p1s,
-                                          p2s, weight)
+                                          prev_n[k], mins[k], started[k], prev[k], cur[k], tmp,
+                                          change_l, change_r_rev, p1s, p2s, weight)
                     started[k] = True
                     prev_lo[k] = base
                     prev_n[k] = n
