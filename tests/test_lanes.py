@@ -4,6 +4,7 @@ import numpy as np
 from numba import njit
 
 from vsmatch._kernels.lanes import (LANES, add_in_lanes, copy_lanes, divide_lanes,
+                                    path_step_chunks_add, path_step_chunks_write,
                                     path_step_lanes)
 from vsmatch._kernels.scanline import path_step
 
@@ -36,6 +37,27 @@ def _step_scalar(cost, out, at, prev, cur, change, change_at, p1a, p1b, p2a, p2b
         cur[d + 1] = v
         out[at + d] += weight * v
     return cur[1:LANES + 1].min()
+
+
+@njit(cache=False)
+def _chunks_vector(src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m, weight, chunks, write):
+    if write:
+        return path_step_chunks_write(src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m,
+                                      weight, chunks)
+    return path_step_chunks_add(src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m, weight,
+                                chunks)
+
+
+@njit(cache=False)
+def _chunks_scalar(src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m, weight, chunks, write):
+    least = np.float32(np.inf)
+    for d in range(chunks * LANES):
+        c = change[d]
+        v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - m
+        cur[d + 1] = v
+        dst[d] = weight * v if write else dst[d] + weight * v
+        least = min(least, v)
+    return least
 
 
 def test_lanes_add_only_the_candidates_inside_the_range_and_the_arm(rng):
@@ -95,3 +117,30 @@ def test_a_path_step_in_lanes_is_the_scalar_step(rng):
         assert np.float32(got).tobytes() == np.float32(want).tobytes()
         assert cur_v.tobytes() == cur_s.tobytes()
         assert out_v.tobytes() == out_s.tobytes()
+
+
+def test_a_path_step_over_whole_vectors_is_the_scalar_step(rng):
+    """The whole range's step a vector at a time: each vector's neighbours from the next
+    and the last one, the element past the vectors from memory (a band's infinite end or
+    the next candidate, taken one by one after them), writing or adding."""
+    for trial in range(200):
+        chunks = int(rng.integers(0, 6))
+        size = chunks * LANES + int(rng.integers(0, LANES)) + 2
+        prev = (rng.random(size) * 4).astype(np.float32)
+        prev[rng.random(size) < 0.15] = np.inf
+        src = (rng.random(size) * 3).astype(np.float32)
+        change = (rng.random(size) < 0.5).astype(np.uint8)
+        # The previous minimum: no path cost falls below it (as the int32 minimum takes).
+        finite = prev[np.isfinite(prev)]
+        m = np.float32(finite.min() if finite.size else 0.0)
+        args = (change, np.float32(0.5), np.float32(0.25), m + np.float32(2.0),
+                m + np.float32(1.0), m, np.float32(0.25), chunks, trial % 2 == 0)
+        dst_v = rng.random(size).astype(np.float32)
+        dst_s = dst_v.copy()
+        cur_v = np.full(size, -1, np.float32)
+        cur_s = cur_v.copy()
+        got = _chunks_vector(src, dst_v, prev, cur_v, *args)
+        want = _chunks_scalar(src, dst_s, prev, cur_s, *args)
+        assert np.float32(got).tobytes() == np.float32(want).tobytes()
+        assert cur_v.tobytes() == cur_s.tobytes()
+        assert dst_v.tobytes() == dst_s.tobytes()

@@ -12,6 +12,7 @@ makes sure the :data:`LANES` elements from an index lie inside the array.
 
 from llvmlite import ir
 from numba import types
+from numba.core import cgutils
 from numba.extending import intrinsic
 
 #: Candidates a narrow band's step takes at once: one vector of float32.
@@ -48,6 +49,10 @@ class _Lanes:
         element_pointer = self.builder.gep(self.data(i), [at])
         return self.builder.bitcast(element_pointer,
                                     ir.VectorType(element, LANES).as_pointer())
+
+    def element(self, i, at):
+        """Array ``i``'s float32 element at flat index ``at``."""
+        return self.builder.load(self.builder.gep(self.data(i), [at]))
 
     def load(self, i, at, element=_F32):
         return self.builder.load(self.pointer(i, at, element), align=_ALIGN[element])
@@ -130,6 +135,36 @@ def divide_lanes(typingctx, dst, dst_at, numerator, denominator):
     return sig, codegen
 
 
+def _path_costs(v, below, stay, above, changes, penalties, cost, m):
+    """The recursion's new path costs of one vector of candidates, from the previous ones
+    at d - 1, d and d + 1, as ``_kernels.scanline.path_step`` takes them lane by lane:
+    ``cost + min(stay, P2 + min, min(below, above) + P1) - m``, with (p1b, p2b) where
+    ``changes`` is nonzero, (p1a, p2a) elsewhere (``penalties``: the four as vectors)."""
+    builder = v.builder
+    p1a, p1b, p2a, p2b = penalties
+    changed = builder.icmp_unsigned("!=", changes,
+                                    ir.Constant(ir.VectorType(_U8, LANES), [0] * LANES))
+    jump = builder.fadd(v.lesser(below, above), builder.select(changed, p1b, p1a))
+    best = v.lesser(v.lesser(stay, builder.select(changed, p2b, p2a)), jump)
+    return builder.fsub(builder.fadd(cost, best), m)
+
+
+def _least(builder, bits):
+    """The least of a vector of int32, in lane 0 of the result."""
+    for half in (LANES // 2, LANES // 4, 1):
+        other = builder.shuffle_vector(
+            bits, ir.Constant(_VI, ir.Undefined),
+            ir.Constant(_VI, [(j + half) % LANES for j in range(LANES)]))
+        bits = builder.select(builder.icmp_signed("<", bits, other), bits, other)
+    return bits
+
+
+def _float_of_least(builder, bits):
+    """Path costs are >= 0, where float32 orders as int32: their least as a float."""
+    return builder.bitcast(builder.extract_element(_least(builder, bits),
+                                                   ir.Constant(_I32, 0)), _F32)
+
+
 @intrinsic
 def path_step_lanes(typingctx, cost, out, at, prev, cur, change, change_at, p1a, p1b, p2a,
                     p2b, m, weight, n):
@@ -151,37 +186,105 @@ def path_step_lanes(typingctx, cost, out, at, prev, cur, change, change_at, p1a,
         v = _Lanes(context, builder, signature, args)
         one = v.constant_index(1)
         stay = v.load(3, one)
-        prev_data = v.data(3)
         ends = ir.Constant(_VF, ir.Undefined)
         for lane, position in ((0, 0), (1, LANES + 1)):
-            end = builder.load(builder.gep(prev_data, [v.constant_index(position)]))
-            ends = builder.insert_element(ends, end, ir.Constant(_I32, lane))
+            ends = builder.insert_element(ends, v.element(3, v.constant_index(position)),
+                                          ir.Constant(_I32, lane))
         # Lanes 0..7 are ``stay``'s, LANES the lower end, LANES + 1 the upper.
         below = builder.shuffle_vector(stay, ends,
                                        ir.Constant(_VI, [LANES] + list(range(LANES - 1))))
         above = builder.shuffle_vector(stay, ends,
                                        ir.Constant(_VI, list(range(1, LANES)) + [LANES + 1]))
-        changes = v.load(5, v.index(6), _U8)
-        changed = builder.icmp_unsigned("!=", changes,
-                                        ir.Constant(ir.VectorType(_U8, LANES),
-                                                    [0] * LANES))
-        p1 = builder.select(changed, v.float_lanes(8), v.float_lanes(7))
-        p2_total = builder.select(changed, v.float_lanes(10), v.float_lanes(9))
-        jump = builder.fadd(v.lesser(below, above), p1)
-        best = v.lesser(v.lesser(stay, p2_total), jump)
         at = v.index(2)
-        step = builder.fsub(builder.fadd(v.load(0, at), best), v.float_lanes(11))
+        step = _path_costs(v, below, stay, above, v.load(5, v.index(6), _U8),
+                           [v.float_lanes(i) for i in (7, 8, 9, 10)], v.load(0, at),
+                           v.float_lanes(11))
         inside = builder.icmp_signed("<", _LANE_NUMBERS, v.int_lanes(13))
         step = builder.select(inside, step, ir.Constant(_VF, [float("inf")] * LANES))
         v.store(step, 4, one)
         v.store(builder.fadd(v.load(1, at), builder.fmul(v.float_lanes(12), step)), 1, at)
-        # The least of the lanes: path costs are >= 0, where float32 orders as int32.
-        bits = builder.bitcast(step, _VI)
-        for half in (4, 2, 1):
-            other = builder.shuffle_vector(
-                bits, ir.Constant(_VI, ir.Undefined),
-                ir.Constant(_VI, [(j + half) % LANES for j in range(LANES)]))
-            bits = builder.select(builder.icmp_signed("<", bits, other), bits, other)
-        return builder.bitcast(builder.extract_element(bits, ir.Constant(_I32, 0)), _F32)
+        return _float_of_least(builder, builder.bitcast(step, _VI))
 
     return sig, codegen
+
+
+def _path_step_chunks(write):
+    """:func:`path_step_lanes` over the whole of a pixel's ``chunks`` x LANES candidates
+    (the whole range, or a band wider than a vector), a vector at a time; with ``write``
+    the step writes ``weight`` x its path costs to ``dst`` rather than adds them."""
+
+    @intrinsic
+    def path_step_chunks(typingctx, src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m, weight,
+                         chunks):
+        """Candidates 0 .. LANES x ``chunks`` - 1 of one step of the path recursion
+        (``_kernels.scanline``'s ``next_step``, the same operations lane by lane) from the
+        pixel's views ``src``, ``dst``, ``change``; returns their least path cost
+        (infinite without chunks). ``prev``: the previous path costs at 1 + d, the lower
+        end at 0, read a vector at a time as the last step stored them, each vector's
+        neighbours shuffled in from the next and the last one: loads straddling two
+        vectors' stores wait until they reach the cache."""
+        sig = types.float32(src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m, weight,
+                            chunks)
+
+        def codegen(context, builder, signature, args):
+            v = _Lanes(context, builder, signature, args)
+            n_chunks = v.index(11)
+            one = v.constant_index(1)
+            # Carried from vector to vector: the last one's path costs (its lane 7 is the
+            # lower neighbour of this one's lane 0), this one's, the least so far.
+            behind = cgutils.alloca_once(builder, _VF)
+            here = cgutils.alloca_once(builder, _VF)
+            least = cgutils.alloca_once(builder, _VI)
+            lower_end = v.element(2, v.constant_index(0))
+            builder.store(builder.insert_element(ir.Constant(_VF, ir.Undefined), lower_end,
+                                                 ir.Constant(_I32, LANES - 1)), behind)
+            builder.store(v.load(2, one), here)
+            builder.store(ir.Constant(_VI, [_INF_BITS] * LANES), least)
+            penalties = [v.float_lanes(i) for i in (5, 6, 7, 8)]
+            m, w = v.float_lanes(9), v.float_lanes(10)
+            with cgutils.for_range(builder, n_chunks) as loop:
+                base = builder.mul(loop.index, v.constant_index(LANES))
+                next_base = builder.add(base, v.constant_index(LANES + 1))
+                stay = builder.load(here)
+                is_last = builder.icmp_signed(">=", builder.add(loop.index, one), n_chunks)
+                with builder.if_else(is_last) as (last, more):
+                    with last:  # the next path cost past the vectors: one element
+                        ahead_last = builder.insert_element(
+                            ir.Constant(_VF, ir.Undefined), v.element(2, next_base),
+                            ir.Constant(_I32, 0))
+                        last_block = builder.block
+                    with more:
+                        ahead_more = v.load(2, next_base)
+                        more_block = builder.block
+                ahead = builder.phi(_VF)
+                ahead.add_incoming(ahead_last, last_block)
+                ahead.add_incoming(ahead_more, more_block)
+                below = builder.shuffle_vector(
+                    builder.load(behind), stay,
+                    ir.Constant(_VI, [LANES - 1] + list(range(LANES, 2 * LANES - 1))))
+                above = builder.shuffle_vector(
+                    stay, ahead, ir.Constant(_VI, list(range(1, LANES)) + [LANES]))
+                step = _path_costs(v, below, stay, above, v.load(4, base, _U8), penalties,
+                                   v.load(0, base), m)
+                v.store(step, 3, builder.add(base, one))
+                weighted = builder.fmul(w, step)
+                if not write:
+                    weighted = builder.fadd(v.load(1, base), weighted)
+                v.store(weighted, 1, base)
+                bits = builder.bitcast(step, _VI)
+                so_far = builder.load(least)
+                builder.store(builder.select(builder.icmp_signed("<", bits, so_far), bits,
+                                             so_far), least)
+                builder.store(stay, behind)
+                builder.store(ahead, here)
+            return _float_of_least(builder, builder.load(least))
+
+        return sig, codegen
+
+    return path_step_chunks
+
+
+#: The bits of float32 infinity: the least path cost of no candidates.
+_INF_BITS = 0x7F800000
+path_step_chunks_write = _path_step_chunks(True)
+path_step_chunks_add = _path_step_chunks(False)

@@ -2,7 +2,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import KERNEL_OPTIONS
-from .lanes import LANES, path_step_lanes
+from .lanes import LANES, path_step_chunks_add, path_step_chunks_write, path_step_lanes
 
 
 @njit(inline="always")
@@ -50,30 +50,49 @@ def _path_steps(write, lanes):
 
         ``prev``, ``cur``: path costs at 1 + d, with inf at both ends so that d - 1 and
         d + 1 need no tests. ``change_r[d]`` picks the penalties: (p1a, p2a) where the
-        right image does not change at disparity d, (p1b, p2b) where it does. Written
-        without branches and table lookups so that LLVM vectorises the loop over d, and
-        with ``a if a < b else b`` rather than ``min``, whose NaN handling Numba compiles
-        into branches that stop it.
+        right image does not change at disparity d, (p1b, p2b) where it does. The whole
+        vectors of LANES go to ``_kernels.lanes`` (the same operations lane by lane), the
+        rest one by one; a narrow band (``lanes``) takes one vector, written without
+        branches and table lookups so that LLVM vectorises it, and with ``a if a < b else
+        b`` rather than ``min``, whose NaN handling Numba compiles into branches that stop
+        it.
         """
-        span = LANES if lanes else n
-        for d in range(span):
+        if lanes:
+            for d in range(LANES):
+                c = change_r[d]
+                v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - \
+                    prev_min
+                v = v if d < n else np.float32(np.inf)
+                cur[d + 1] = v
+                if write:
+                    dst[d] = weight * v
+                else:
+                    dst[d] += weight * v
+            # Path costs are >= 0, where float32 bit patterns order like int32: an integer
+            # minimum vectorises, a float one does not.
+            smallest = cur_bits[1]
+            for d in range(LANES):
+                b = cur_bits[d + 1]
+                smallest = b if b < smallest else smallest
+            bits[0] = smallest
+            return bits.view(np.float32)[0]
+        chunks = n // LANES
+        if write:
+            new_min = path_step_chunks_write(src, dst, prev, cur, change_r, p1a, p1b, p2a,
+                                             p2b, prev_min, weight, chunks)
+        else:
+            new_min = path_step_chunks_add(src, dst, prev, cur, change_r, p1a, p1b, p2a, p2b,
+                                           prev_min, weight, chunks)
+        for d in range(chunks * LANES, n):
             c = change_r[d]
             v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - prev_min
-            if lanes:
-                v = v if d < n else np.float32(np.inf)
             cur[d + 1] = v
             if write:
                 dst[d] = weight * v
             else:
                 dst[d] += weight * v
-        # Path costs are >= 0, where float32 bit patterns order like int32: an integer
-        # minimum vectorises, a float one does not.
-        smallest = cur_bits[1]
-        for d in range(span):
-            b = cur_bits[d + 1]
-            smallest = b if b < smallest else smallest
-        bits[0] = smallest
-        return bits.view(np.float32)[0]
+            new_min = v if v < new_min else new_min
+        return new_min
 
     return first_step, next_step
 
