@@ -28,6 +28,16 @@ def _path_steps(write, lanes):
     not vectorise; those from the band's ``n`` on are infinite."""
 
     @njit(inline="always")
+    def keep(cur, dst, d, v, weight):
+        """Candidate d's path cost ``v`` into ``cur`` (at 1 + d) and ``weight`` x it into
+        ``dst``."""
+        cur[d + 1] = v
+        if write:
+            dst[d] = weight * v
+        else:
+            dst[d] += weight * v
+
+    @njit(inline="always")
     def first_step(src, dst, cur, weight, n):
         """The path starts: its cost is the matching cost. Returns its minimum over d."""
         new_min = np.float32(np.inf)
@@ -35,11 +45,7 @@ def _path_steps(write, lanes):
             v = src[d]
             if lanes:
                 v = v if d < n else np.float32(np.inf)
-            cur[d + 1] = v
-            if write:
-                dst[d] = weight * v
-            else:
-                dst[d] += weight * v
+            keep(cur, dst, d, v, weight)
             new_min = v if v < new_min else new_min
         return new_min
 
@@ -63,11 +69,7 @@ def _path_steps(write, lanes):
                 v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - \
                     prev_min
                 v = v if d < n else np.float32(np.inf)
-                cur[d + 1] = v
-                if write:
-                    dst[d] = weight * v
-                else:
-                    dst[d] += weight * v
+                keep(cur, dst, d, v, weight)
             # Path costs are >= 0, where float32 bit patterns order like int32: an integer
             # minimum vectorises, a float one does not.
             smallest = cur_bits[1]
@@ -86,11 +88,7 @@ def _path_steps(write, lanes):
         for d in range(chunks * LANES, n):
             c = change_r[d]
             v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - prev_min
-            cur[d + 1] = v
-            if write:
-                dst[d] = weight * v
-            else:
-                dst[d] += weight * v
+            keep(cur, dst, d, v, weight)
             new_min = v if v < new_min else new_min
         return new_min
 
