@@ -3,9 +3,10 @@
 import numpy as np
 from numba import njit
 
-from vsmatch._kernels.lanes import (LANES, add_in_lanes, copy_lanes, divide_lanes,
-                                    path_step_chunks_add, path_step_chunks_write,
-                                    path_step_lanes)
+from vsmatch._kernels.disparity import _argmin
+from vsmatch._kernels.lanes import (LANES, add_in_lanes, argmin_chunks, copy_lanes,
+                                    divide_lanes, path_step_chunks_add,
+                                    path_step_chunks_write, path_step_lanes)
 from vsmatch._kernels.scanline import path_step
 
 
@@ -144,3 +145,23 @@ def test_a_path_step_over_whole_vectors_is_the_scalar_step(rng):
         assert np.float32(got).tobytes() == np.float32(want).tobytes()
         assert cur_v.tobytes() == cur_s.tobytes()
         assert dst_v.tobytes() == dst_s.tobytes()
+
+
+@njit(cache=False)
+def _least_place(costs, n):
+    return argmin_chunks(costs, n // LANES), _argmin(costs, n)
+
+
+def test_the_least_in_lanes_is_the_first_least(rng):
+    """Ties (many equal costs, +0 and -0, infinities) take the first, as a walk with ``<``
+    does: within the vectors and with the rest after them."""
+    for _ in range(300):
+        n = int(rng.integers(LANES, 6 * LANES))
+        costs = rng.integers(0, 4, n).astype(np.float32)  # many ties
+        costs[rng.random(n) < 0.1] = np.inf
+        costs[rng.random(n) < 0.1] = -0.0
+        in_vectors, whole = _least_place(costs, n)
+        vectors = n // LANES * LANES
+        first = next(d for d in range(vectors) if costs[d] == costs[:vectors].min())
+        assert in_vectors == first
+        assert whole == next(d for d in range(n) if costs[d] == costs.min())

@@ -5,16 +5,24 @@ from . import KERNEL_OPTIONS
 from .rows import dealt
 from .arms import colour_distance
 from .confidence import curve_at
+from .lanes import LANES, argmin_chunks
 
 VALID, OCCLUDED, MISMATCHED = 0, 1, 2
 
 
 @njit(inline="always")
 def _argmin(costs, n_disp):
-    """The d of the smallest of ``costs[:n_disp]``; ties take the smaller d."""
-    best = 0
-    best_cost = costs[0]
-    for d in range(1, n_disp):
+    """The d of the smallest of ``costs[:n_disp]``; ties take the smaller d. Whole vectors
+    of LANES first (``_kernels.lanes``), then the rest one by one."""
+    chunks = n_disp // LANES
+    if chunks > 0:
+        best = argmin_chunks(costs, chunks)
+        start = chunks * LANES
+    else:
+        best = 0
+        start = 1
+    best_cost = costs[best]
+    for d in range(start, n_disp):
         c = costs[d]
         if c < best_cost:
             best_cost = c

@@ -288,3 +288,42 @@ def _path_step_chunks(write):
 _INF_BITS = 0x7F800000
 path_step_chunks_write = _path_step_chunks(True)
 path_step_chunks_add = _path_step_chunks(False)
+
+
+@intrinsic
+def argmin_chunks(typingctx, costs, chunks):
+    """The index of the least of ``costs[:LANES * chunks]`` (``chunks`` >= 1), the first
+    where several are equal, as a scalar walk with ``<`` finds it (for costs without
+    NaN): each lane keeps its first least, then the lanes' least, the earliest of equals."""
+    sig = types.int64(costs, chunks)
+
+    def codegen(context, builder, signature, args):
+        v = _Lanes(context, builder, signature, args)
+        n_chunks = v.index(1)
+        values = cgutils.alloca_once(builder, _VF)
+        places = cgutils.alloca_once(builder, _VI)
+        builder.store(v.load(0, v.constant_index(0)), values)
+        builder.store(_LANE_NUMBERS, places)
+        with cgutils.for_range(builder, builder.sub(n_chunks, v.constant_index(1))) as loop:
+            chunk = builder.add(loop.index, v.constant_index(1))
+            base = builder.mul(chunk, v.constant_index(LANES))
+            candidate = v.load(0, base)
+            held = builder.load(values)
+            take = builder.fcmp_ordered("<", candidate, held)
+            builder.store(builder.select(take, candidate, held), values)
+            here = builder.add(v.splat(builder.trunc(base, _I32), _VI), _LANE_NUMBERS)
+            builder.store(builder.select(take, here, builder.load(places)), places)
+        value, place = builder.load(values), builder.load(places)
+        for half in (LANES // 2, LANES // 4, 1):
+            turn = ir.Constant(_VI, [(j + half) % LANES for j in range(LANES)])
+            other_value = builder.shuffle_vector(value, ir.Constant(_VF, ir.Undefined), turn)
+            other_place = builder.shuffle_vector(place, ir.Constant(_VI, ir.Undefined), turn)
+            earlier_equal = builder.and_(builder.fcmp_ordered("==", other_value, value),
+                                         builder.icmp_signed("<", other_place, place))
+            take = builder.or_(builder.fcmp_ordered("<", other_value, value), earlier_equal)
+            value = builder.select(take, other_value, value)
+            place = builder.select(take, other_place, place)
+        first = builder.extract_element(place, ir.Constant(_I32, 0))
+        return builder.sext(first, ir.IntType(64))
+
+    return sig, codegen
