@@ -51,6 +51,7 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
     step_x = along_rows
     count_here = counts_out.shape[0] > 0
     counted = counts_in.shape[0] > 0
+    padded = arms_r_rev.shape[2]
     # Bands of at most LANES candidates in a volume at least as deep: summed LANES at a
     # time, the lanes past a band unused.
     narrow = (count_here or counted) and depth >= LANES
@@ -60,6 +61,7 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
         # A neighbour's band, costs and region sizes, with LANES zeros either side.
         window = np.zeros(3 * LANES, dtype=np.float32)
         held = np.zeros(3 * LANES, dtype=np.float32)
+        ones = np.ones(LANES, dtype=np.float32)
         for x in range(width):
             base = np.int64(lo[y, x])
             n = np.int64(count[y, x])
@@ -96,10 +98,22 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
                     first = max(np.int64(0), -off)
                     stop = min(n, n_here - off)
                     if lanes and n_here <= LANES:
-                        # The neighbour's band laid into a zero-padded window, then read
-                        # shifted by ``off``: one vector whatever the two bands' offsets.
                         if off <= -LANES or off >= LANES:
                             continue  # the bands do not meet
+                        # One vector (``_kernels.lanes``): a lane outside either band or
+                        # past the right pixel's arm adds nothing.
+                        at = (ny * width + nx) * depth + off
+                        if 0 <= at <= src.size - LANES:
+                            reach_at = (arm * height + y) * padded + width - 1 - x + base
+                            if counted:
+                                add_in_lanes(total, size, src, at, counts_in, at, first, stop,
+                                             arms_r_rev, reach_at, k)
+                            else:
+                                add_in_lanes(total, size, src, at, ones, 0, first, stop,
+                                             arms_r_rev, reach_at, k)
+                            continue
+                        # At the volume's ends: the neighbour's band laid into a
+                        # zero-padded window, then read shifted by ``off``.
                         row = src[ny, nx]
                         for j in range(LANES):
                             window[LANES + j] = row[j] if j < n_here else np.float32(0.0)

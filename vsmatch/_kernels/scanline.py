@@ -50,34 +50,20 @@ def _path_steps(write, lanes):
         return new_min
 
     @njit(inline="always")
-    def next_step(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a, p2b, prev_min,
-                  weight, n, bits):
+    def next_step(src, dst, prev, cur, change_r, p1a, p1b, p2a, p2b, prev_min, weight, n):
         """One step of the path recursion over all d; returns the new minimum over d.
 
         ``prev``, ``cur``: path costs at 1 + d, with inf at both ends so that d - 1 and
         d + 1 need no tests. ``change_r[d]`` picks the penalties: (p1a, p2a) where the
-        right image does not change at disparity d, (p1b, p2b) where it does. The whole
-        vectors of LANES go to ``_kernels.lanes`` (the same operations lane by lane), the
-        rest one by one; a narrow band (``lanes``) takes one vector, written without
-        branches and table lookups so that LLVM vectorises it, and with ``a if a < b else
-        b`` rather than ``min``, whose NaN handling Numba compiles into branches that stop
-        it.
+        right image does not change at disparity d, (p1b, p2b) where it does. A narrow
+        band (``lanes``) takes one vector of LANES, the whole range and wider bands their
+        whole vectors (``_kernels.lanes``: the same operations lane by lane) and the rest
+        one by one, with ``a if a < b else b`` rather than ``min``, whose NaN handling
+        Numba compiles into branches.
         """
         if lanes:
-            for d in range(LANES):
-                c = change_r[d]
-                v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - \
-                    prev_min
-                v = v if d < n else np.float32(np.inf)
-                keep(cur, dst, d, v, weight)
-            # Path costs are >= 0, where float32 bit patterns order like int32: an integer
-            # minimum vectorises, a float one does not.
-            smallest = cur_bits[1]
-            for d in range(LANES):
-                b = cur_bits[d + 1]
-                smallest = b if b < smallest else smallest
-            bits[0] = smallest
-            return bits.view(np.float32)[0]
+            return path_step_lanes(src, dst, 0, prev, cur, change_r, 0, p1a, p1b, p2a, p2b,
+                                   prev_min, weight, n)
         chunks = n // LANES
         if write:
             new_min = path_step_chunks_write(src, dst, prev, cur, change_r, p1a, p1b, p2a,
@@ -119,7 +105,7 @@ def _walk_steps(banded, write):
 
     @njit(inline="always")
     def walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y, x,
-                  ey, ex, prev_lo, prev_n, m, prev, cur, cur_bits, tmp, bits):
+                  ey, ex, prev_lo, prev_n, m, prev, cur, tmp):
         """Pixel (y, x) of a path; the edge crossed from the previous pixel is stored at
         (ey, ex); the previous pixel's band was ``prev_lo``, ``prev_n`` (-1 before the
         path starts) and its path minimum ``m``. Returns this pixel's three. A pixel
@@ -152,21 +138,22 @@ def _walk_steps(banded, write):
             change_r = change_r_rev[ey, width - 1 - ex + base:]
             p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
             if not banded:
-                new_min = next_whole(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
-                                     p2b, m, weight, n, bits)
+                new_min = next_whole(src, dst, prev, cur, change_r, p1a, p1b, p2a, p2b, m,
+                                     weight, n)
             elif lanes:
-                new_min = next_lanes(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
-                                     p2b, m, weight, n, bits)
+                new_min = next_lanes(src, dst, prev, cur, change_r, p1a, p1b, p2a, p2b, m,
+                                     weight, n)
             else:
-                new_min = next_whole(src, dst, prev, cur, cur_bits, change_r, p1a, p1b, p2a,
-                                     p2b, m, weight, n, bits)
+                new_min = next_whole(src, dst, prev, cur, change_r, p1a, p1b, p2a, p2b, m,
+                                     weight, n)
         if banded:
             # Past the band's ends the path is infinite (an earlier, wider band may have
-            # left values there).
+            # left values there); a vector's lanes past its band are already.
             cur[0] = np.float32(np.inf)
-            cur[n + 1] = np.float32(np.inf)
             if lanes:
                 cur[LANES + 1] = np.float32(np.inf)
+            else:
+                cur[n + 1] = np.float32(np.inf)
         return base, n, new_min
 
     return walk_step
@@ -191,9 +178,7 @@ def _row_kernel(banded):
         for y in prange(height):
             # Two path-cost rows, used in turn as previous and current.
             paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
-            path_bits = paths.view(np.int32)
             tmp = np.empty(depth + 2, dtype=np.float32)
-            bits = np.empty(1, dtype=np.int32)
             prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
             if banded:
                 out[y] = np.float32(0.0)
@@ -215,17 +200,17 @@ def _row_kernel(banded):
                         prev_lo, prev_n, m = _walk_whole_write(
                             cost, out, lo, count, change_l, change_r_rev, p1s, p2s,
                             weight, y, x, y, ex, prev_lo, prev_n, m, paths[1 - now],
-                            paths[now], path_bits[now], tmp, bits)
+                            paths[now], tmp)
                     elif banded:
                         prev_lo, prev_n, m = _walk_band_add(
                             cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
                             y, x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
-                            path_bits[now], tmp, bits)
+                            tmp)
                     else:
                         prev_lo, prev_n, m = _walk_whole_add(
                             cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
                             y, x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
-                            path_bits[now], tmp, bits)
+                            tmp)
 
     return rows
 
@@ -243,7 +228,6 @@ def _column_kernel(banded):
             prev = np.full((n, depth + 2), np.inf, dtype=np.float32)
             cur = np.full((n, depth + 2), np.inf, dtype=np.float32)
             tmp = np.empty(depth + 2, dtype=np.float32)
-            bits = np.empty(1, dtype=np.int32)
             prev_lo = np.zeros(n, dtype=np.int64)
             prev_n = np.empty(n, dtype=np.int64)
             mins = np.zeros(n, dtype=np.float32)
@@ -252,7 +236,6 @@ def _column_kernel(banded):
                 for step in range(height):
                     y = step if direction == 1 else height - 1 - step
                     ey = y if direction == 1 else y + 1  # the edge crossed, at the later row
-                    cur_bits = cur.view(np.int32)
                     for k in range(n):
                         x = x0 + k
                         if banded and count[y, x] <= 0:  # no band: the path restarts
@@ -262,12 +245,12 @@ def _column_kernel(banded):
                             prev_lo[k], prev_n[k], mins[k] = _walk_band_add(
                                 cost, out, lo, count, change_l, change_r_rev, p1s, p2s,
                                 weight, y, x, ey, x, prev_lo[k], prev_n[k], mins[k],
-                                prev[k], cur[k], cur_bits[k], tmp, bits)
+                                prev[k], cur[k], tmp)
                         else:
                             prev_lo[k], prev_n[k], mins[k] = _walk_whole_add(
                                 cost, out, lo, count, change_l, change_r_rev, p1s, p2s,
                                 weight, y, x, ey, x, prev_lo[k], prev_n[k], mins[k],
-                                prev[k], cur[k], cur_bits[k], tmp, bits)
+                                prev[k], cur[k], tmp)
                     prev, cur = cur, prev
 
     return columns
@@ -290,9 +273,7 @@ def _diagonal_kernel(banded):
             room_x = width - 1 - x0 if step_x == 1 else x0
             length = min(height - y0, room_x + 1)
             paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
-            path_bits = paths.view(np.int32)
             tmp = np.empty(depth + 2, dtype=np.float32)
-            bits = np.empty(1, dtype=np.int32)
             prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
             for direction in (1, -1):
                 start = 0 if direction == 1 else length - 1
@@ -312,12 +293,12 @@ def _diagonal_kernel(banded):
                         prev_lo, prev_n, m = _walk_band_add(
                             cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
                             y, x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
-                            path_bits[now], tmp, bits)
+                            tmp)
                     else:
                         prev_lo, prev_n, m = _walk_whole_add(
                             cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
                             y, x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
-                            path_bits[now], tmp, bits)
+                            tmp)
 
     return diagonal
 
