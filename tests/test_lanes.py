@@ -1,6 +1,7 @@
 """The vector steps of ``_kernels.lanes`` against the scalar loops they stand for, to the bit."""
 
 import numpy as np
+import pytest
 from numba import njit
 
 from vsmatch._kernels.disparity import _argmin
@@ -165,3 +166,15 @@ def test_the_least_in_lanes_is_the_first_least(rng):
         first = next(d for d in range(vectors) if costs[d] == costs[:vectors].min())
         assert in_vectors == first
         assert whole == next(d for d in range(n) if costs[d] == costs.min())
+
+
+def test_lanes_refuse_arrays_they_cannot_read_by_flat_index():
+    """A float64 or strided array would be read as float32 lanes: refused when compiled."""
+    from numba.core.errors import TypingError
+
+    doubles = np.zeros(16)
+    strided = np.zeros(32, np.float32)[::2]
+    for dst in (doubles, strided):
+        with pytest.raises(TypingError, match="C-contiguous float32"):
+            _copy_and_divide(dst, 0, np.zeros(8, np.float32), 0, np.ones(8, np.float32),
+                             np.ones(8, np.float32), np.zeros(8, np.float32), 0)

@@ -6,13 +6,16 @@ PR 8852), so each ran as eight scalar lanes with their masks worked out one by o
 intrinsics take the same IEEE operations in the same order in each lane, as one vector:
 their results are the scalar loops' to the bit.
 
-Arrays are read and written by flat index into their (C-contiguous) data: the caller
-makes sure the :data:`LANES` elements from an index lie inside the array.
+The whole range's path steps and least cost take the same code a vector at a time. Arrays
+are read and written by flat index into their C-contiguous data (checked when a kernel is
+compiled, with their element types): the caller makes sure the :data:`LANES` elements from
+an index lie inside the array.
 """
 
 from llvmlite import ir
 from numba import types
 from numba.core import cgutils
+from numba.core.errors import TypingError
 from numba.extending import intrinsic
 
 #: Candidates a narrow band's step takes at once: one vector of float32.
@@ -25,6 +28,16 @@ _VI = ir.VectorType(_I32, LANES)
 _U8 = ir.IntType(8)
 #: Loads and stores promise only their element's alignment (a band starts anywhere).
 _ALIGN = {_F32: 4, _U8: 1}
+
+
+def _arrays(**expected):
+    """Refuse, at compile time, an argument that is not a C-contiguous array of the dtype
+    named (``name=(array_type, dtype)``): the code reads its data by flat index."""
+    for name, (given, dtype) in expected.items():
+        if not (isinstance(given, types.Array) and given.dtype == dtype
+                and given.layout == "C"):
+            raise TypingError(f"lanes: {name} must be a C-contiguous {dtype} array, "
+                              f"got {given}")
 
 
 class _Lanes:
@@ -88,6 +101,8 @@ def add_in_lanes(typingctx, total, size, src, src_at, held, held_at, first, stop
                  reach_at, k):
     """For each lane d: where ``first <= d < stop`` and ``k <= reach.flat[reach_at + d]``,
     ``total[d] += src.flat[src_at + d]`` and ``size[d] += held.flat[held_at + d]``."""
+    _arrays(total=(total, types.float32), size=(size, types.float32),
+            src=(src, types.float32), held=(held, types.float32), reach=(reach, types.uint8))
     sig = types.void(total, size, src, src_at, held, held_at, first, stop, reach, reach_at,
                      k)
 
@@ -111,6 +126,7 @@ def add_in_lanes(typingctx, total, size, src, src_at, held, held_at, first, stop
 @intrinsic
 def copy_lanes(typingctx, dst, dst_at, src, src_at):
     """``dst.flat[dst_at:dst_at + LANES] = src.flat[src_at:src_at + LANES]``."""
+    _arrays(dst=(dst, types.float32), src=(src, types.float32))
     sig = types.void(dst, dst_at, src, src_at)
 
     def codegen(context, builder, signature, args):
@@ -124,6 +140,8 @@ def copy_lanes(typingctx, dst, dst_at, src, src_at):
 @intrinsic
 def divide_lanes(typingctx, dst, dst_at, numerator, denominator):
     """``dst.flat[dst_at:dst_at + LANES] = numerator[:LANES] / denominator[:LANES]``."""
+    _arrays(dst=(dst, types.float32), numerator=(numerator, types.float32),
+            denominator=(denominator, types.float32))
     sig = types.void(dst, dst_at, numerator, denominator)
 
     def codegen(context, builder, signature, args):
@@ -179,6 +197,8 @@ def path_step_lanes(typingctx, cost, out, at, prev, cur, change, change_at, p1a,
     Its lanes are read as the last step stored them, one vector, and shuffled against
     the two ends for d - 1 and d + 1: loads straddling a vector's store wait until it
     reaches the cache (1.8x slower than the scalar loop)."""
+    _arrays(cost=(cost, types.float32), out=(out, types.float32), prev=(prev, types.float32),
+            cur=(cur, types.float32), change=(change, types.uint8))
     sig = types.float32(cost, out, at, prev, cur, change, change_at, p1a, p1b, p2a, p2b, m,
                         weight, n)
 
@@ -223,6 +243,9 @@ def _path_step_chunks(write):
         end at 0, read a vector at a time as the last step stored them, each vector's
         neighbours shuffled in from the next and the last one: loads straddling two
         vectors' stores wait until they reach the cache."""
+        _arrays(src=(src, types.float32), dst=(dst, types.float32),
+                prev=(prev, types.float32), cur=(cur, types.float32),
+                change=(change, types.uint8))
         sig = types.float32(src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m, weight,
                             chunks)
 
@@ -295,6 +318,7 @@ def argmin_chunks(typingctx, costs, chunks):
     """The index of the least of ``costs[:LANES * chunks]`` (``chunks`` >= 1), the first
     where several are equal, as a scalar walk with ``<`` finds it (for costs without
     NaN): each lane keeps its first least, then the lanes' least, the earliest of equals."""
+    _arrays(costs=(costs, types.float32))
     sig = types.int64(costs, chunks)
 
     def codegen(context, builder, signature, args):
