@@ -58,10 +58,7 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
     for y in prange(height):
         total = np.zeros(max(depth, LANES), dtype=np.float32)
         size = np.ones(max(depth, LANES), dtype=np.float32)
-        # A neighbour's band, costs and region sizes, with LANES zeros either side.
-        window = np.zeros(3 * LANES, dtype=np.float32)
-        held = np.zeros(3 * LANES, dtype=np.float32)
-        ones = np.ones(LANES, dtype=np.float32)
+        ones = np.ones(LANES, dtype=np.float32)  # each pixel counts as one
         for x in range(width):
             base = np.int64(lo[y, x])
             n = np.int64(count[y, x])
@@ -112,25 +109,8 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
                                 add_in_lanes(total, size, src, at, ones, 0, first, stop,
                                              arms_r_rev, reach_at, k)
                             continue
-                        # At the volume's ends: the neighbour's band laid into a
-                        # zero-padded window, then read shifted by ``off``.
-                        row = src[ny, nx]
-                        for j in range(LANES):
-                            window[LANES + j] = row[j] if j < n_here else np.float32(0.0)
-                        if counted:
-                            sizes = counts_in[ny, nx]
-                            for j in range(LANES):
-                                held[LANES + j] = sizes[j] if j < n_here else np.float32(0.0)
-                        else:
-                            for j in range(LANES):
-                                held[LANES + j] = np.float32(1.0) if j < n_here else \
-                                    np.float32(0.0)
-                        at = LANES + off
-                        for d in range(LANES):
-                            inside = (k32 <= np.int32(reach_r[d])) & (d < n)
-                            total[d] += window[at + d] if inside else np.float32(0.0)
-                            size[d] += held[at + d] if inside else np.float32(0.0)
-                        continue
+                        # At the volume's ends the vector would be read past them: the
+                        # candidates the two bands share one by one, below.
                     if count_here:
                         for d in range(first, stop):
                             inside = k32 <= np.int32(reach_r[d])
