@@ -16,32 +16,12 @@ from __future__ import annotations
 
 import argparse
 
-import cv2
-import numpy as np
-
-from dark_views import darkened
 from vsmatch import datasets, metrics, pipeline
 from vsmatch.config import with_changes
+from vsmatch.synthetic import shadowed
 
 SCENES = (("kitti2015", ["000000", "000001", "000046"]),
           ("middlebury2014-quarter", ["Adirondack", "Motorcycle", "Piano"]))
-
-
-def shadowed(scene, gain: float, sigma: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The scene's views with the lower half of the left quarter in shadow (and its points
-    in the right view), each with its own noise; and the shadowed region of the left view."""
-    height, width = scene.left.shape[:2]
-    region = np.zeros((height, width), bool)
-    region[height // 2:, :width // 4] = True
-    left, right = (v.astype(np.float32) for v in (scene.left, scene.right))
-    left[region] *= gain
-    ys, xs = np.nonzero(region & (np.nan_to_num(scene.ground_truth, posinf=0) > 0))
-    columns = np.rint(xs - scene.ground_truth[ys, xs]).astype(int)
-    inside = columns >= 0
-    seen = np.zeros(region.shape, np.uint8)
-    seen[ys[inside], columns[inside]] = 1
-    right[cv2.dilate(seen, np.ones((3, 3), np.uint8)).astype(bool)] *= gain
-    return darkened(left, 1.0, sigma, 1), darkened(right, 1.0, sigma, 2), region
 
 
 def main() -> None:
@@ -57,7 +37,8 @@ def main() -> None:
     for dataset, names in SCENES:
         threshold = 3.0 if dataset.startswith("kitti") else 2.0
         for scene in datasets.load_dataset(dataset, args.data_root, names=names):
-            left, right, region = shadowed(scene, args.gain, args.sigma)
+            left, right, region = shadowed(scene.left, scene.right, scene.ground_truth,
+                                           args.gain, args.sigma)
             known = scene.masks.get("nonocc", scene.masks["all"]) & region
             figures = []
             for name, cfg in methods.items():

@@ -22,15 +22,7 @@ import numpy as np
 
 from vsmatch import datasets, evaluation
 from vsmatch.config import with_changes
-
-
-def darkened(view: np.ndarray, gain: float, sigma: float, seed: int,
-             gamma: float = 1.0) -> np.ndarray:
-    """``view`` with its grey levels raised to ``gamma`` (as fractions of 255), scaled by
-    ``gain``, and its own sensor noise."""
-    noise = np.random.default_rng(seed).normal(0.0, sigma, view.shape)
-    levels = view if gamma == 1.0 else 255.0 * (view / 255.0) ** gamma
-    return np.clip(np.rint(levels * gain + noise), 0, 255).astype(np.uint8)
+from vsmatch.synthetic import darkened
 
 
 def dark_scene(scene: datasets.Scene, gain: float, sigma: float, seed: int,

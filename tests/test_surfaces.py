@@ -316,3 +316,49 @@ def test_bridges_kernel_equals_the_numpy_steps_along_columns_and_rows():
                                   across, equal_nan=True)
             drawn += np.isfinite(expected).sum()
     assert drawn > 1000  # the cases hold bridges, not only NaN
+
+
+def test_a_shadow_is_dark_against_the_views_own_median():
+    """in_shadow: a quarter of a bright view at 0.12 of its light is a shadow (but for a
+    box's reach into it from its edge), the rest is not; the same view dark all over keeps
+    its shadow (0.12 of a darker median) and gains none; a view dark all over, no shadow."""
+    from vsmatch.surfaces import in_shadow
+
+    rng = np.random.default_rng(0)
+    view = np.clip(rng.normal(150, 20, (240, 320)), 0, 255)
+    view[120:, :80] *= 0.12
+    bright = in_shadow(view.astype(np.uint8), 3, 0.35, 16)
+    assert bright[140:, :60].all()
+    assert not bright[:100].any() and not bright[:, 100:].any()
+    dim = in_shadow((view * 0.2).astype(np.uint8), 3, 0.35, 16)
+    assert np.array_equal(dim[140:, :60], bright[140:, :60])
+    assert not dim[:100].any() and not dim[:, 100:].any()
+    uniform = in_shadow(np.full((240, 320), 12, np.uint8), 3, 0.35, 16)
+    assert not uniform.any()
+
+
+def test_an_unsure_block_in_a_shadow_keeps_its_own_match(pair):
+    """The unsure wrong block of the first test, its surroundings in the left view in deep
+    shadow: with surfaces.shadow it keeps its match (the shadow's pixels are not unsure),
+    without it takes the plane as in a bright view; a flat pixel in the shadow still counts
+    as unsure."""
+    disp, confidence, labels = _inputs(pair)
+    disp[BLOCK] = 2.0
+    confidence[BLOCK] = 0.1
+    left = pair.left.astype(np.float32)
+    left[60:180, 240:] *= 0.12
+    left = np.rint(left).astype(np.uint8)
+    changes = dict(tolerance=3.0)  # the shadowed view's costs are not the test's business
+    kept = spread_planes(disp, confidence, labels, left, pair.right, pair.max_disp,
+                         _config(shadow=0.35, **changes)).disparity
+    assert np.array_equal(kept[BLOCK], disp[BLOCK])
+    taken = spread_planes(disp, confidence, labels, left, pair.right, pair.max_disp,
+                          _config(shadow=None, **changes)).disparity
+    assert np.mean(np.abs(taken[BLOCK] - pair.disparity[BLOCK]) <= 1.0) > 0.95
+    flat = left.copy()
+    flat[BLOCK] = 9  # one grey level over the whole block: nothing to see
+    filled = spread_planes(disp, confidence, labels, flat, pair.right, pair.max_disp,
+                           _config(shadow=0.35, **changes)).disparity
+    inner = (slice(BLOCK[0].start + 4, BLOCK[0].stop - 4),
+             slice(BLOCK[1].start + 4, BLOCK[1].stop - 4))
+    assert np.mean(np.abs(filled[inner] - pair.disparity[inner]) <= 1.0) > 0.95

@@ -241,14 +241,15 @@ class SurfacesConfig:
     every pixel that was unsure takes its region's plane where the region spreads at most
     ``max_spread`` about it; its confidence is raised to ``refit_confidence`` where the plane
     lies within ``refit_agree`` of its own match or bridge. A pixel whose texture is below
-    ``flat`` counts as unsure. With ``long_arms``, what the planes and bridges leave unsure,
-    and what the refit leaves, take the plane of longer-armed regions (one threshold ``tau``
-    along the whole arm). With ``segments``, last, a blank segment of the view reduced
-    ``levels`` times (cut where neighbours differ by ``segment_delta``, or, with
-    ``segment_jump``, by that, or where their step bends by ``segment_delta``; at least
-    ``segment_area`` of it, at most ``segment_sure`` of its pixels sure) takes the plane
-    that at least ``segment_support`` of the columns of sure pixels within ``segment_ring``
-    of it fit within ``inlier``, where its pixels lie more than ``segment_move`` off it."""
+    ``flat`` counts as unsure; one in a ``shadow`` (and not flat) keeps its match. With
+    ``long_arms``, what the planes and bridges leave unsure, and what the refit leaves, take
+    the plane of longer-armed regions (one threshold ``tau`` along the whole arm). With
+    ``segments``, last, a blank segment of the view reduced ``levels`` times (cut where
+    neighbours differ by ``segment_delta``, or, with ``segment_jump``, by that, or where their
+    step bends by ``segment_delta``; at least ``segment_area`` of it, at most
+    ``segment_sure`` of its pixels sure) takes the plane that at least ``segment_support`` of
+    the columns of sure pixels within ``segment_ring`` of it fit within ``inlier``, where its
+    pixels lie more than ``segment_move`` off it."""
 
     enabled: bool = _param(False, doc="Planes across wide regions for unsure pixels.")
     levels: int = _param(3, 1, 5, doc="Pyramid levels down where the wide regions grow.")
@@ -263,6 +264,14 @@ class SurfacesConfig:
     take_contrast: float | None = _param(None, 1.0, 255.0, nullable=True, doc=(
         "A view's contrast below which take shrinks in proportion; null: take whatever "
         "the contrast."))
+    shadow: float | None = _param(None, 0.0, 1.0, nullable=True, doc=(
+        "A pixel whose neighbourhood's mean grey level (a box of 1/shadow_window of the "
+        "view's width, on the view reduced levels times) is below this share of the view's "
+        "median lies in a shadow and keeps its own match, unless it is flat: no plane, "
+        "bridge, refit or segment replaces it. null: off."))
+    shadow_window: int = _param(16, 1, 256, doc=(
+        "The view's width over this is the side of the box a shadow's light is measured "
+        "over."))
     min_share: float = _param(0.05, 0.0, 1.0, doc=(
         "Share of a region's pixels that must be sure for a plane."))
     max_spread: float = _param(1.0, 0.0, 100.0, doc=(

@@ -83,7 +83,11 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     flat = (texture(grey_levels(left)) < s.flat if s.flat is not None
             else np.zeros(disp.shape, bool))
     sure = (labels == VALID) & np.isfinite(disp) & (confidence >= s.fit) & ~flat
-    was_unsure = (confidence < _shrunk(s.take, contrast, s.take_contrast)) | flat
+    # A pixel in a shadow keeps its own match unless it has no texture at all: its cost
+    # curves are shallow, so its confidence reads low, though the match is mostly right.
+    kept = (in_shadow(left, s.levels, s.shadow, s.shadow_window) & ~flat
+            if s.shadow is not None else np.zeros(disp.shape, bool))
+    was_unsure = ((confidence < _shrunk(s.take, contrast, s.take_contrast)) | flat) & ~kept
     plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier)
     take = close & was_unsure
     # The views' census and gradients, made once for every cost taken below.
@@ -141,16 +145,17 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
         out[settle] = plane[settle]
         confidence[agree] = np.maximum(confidence[agree], np.float32(s.refit_confidence))
     if s.segments:
-        _segment_planes(out, confidence, left, disp, sure, s)
+        _segment_planes(out, confidence, left, disp, sure, kept, s)
     return Spread(np.clip(out, 0, max_disp, out=out), confidence)
 
 
 def _segment_planes(out: np.ndarray, confidence: np.ndarray, left: np.ndarray,
-                    disp: np.ndarray, sure: np.ndarray, s: SurfacesConfig) -> None:
+                    disp: np.ndarray, sure: np.ndarray, kept: np.ndarray,
+                    s: SurfacesConfig) -> None:
     """In place: each blank segment where the match found little sure takes its edge's
-    plane (``vsmatch.segments``) where ``out`` lies more than ``s.segment_move`` off it; a
-    pixel so moved keeps a confidence of at most ``s.bridge_confidence`` (a guess from the
-    edge, out of the cloud)."""
+    plane (``vsmatch.segments``) where ``out`` lies more than ``s.segment_move`` off it,
+    except at the ``kept`` pixels; a pixel so moved keeps a confidence of at most
+    ``s.bridge_confidence`` (a guess from the edge, out of the cloud)."""
     labels, large = blank_segments(left, s.levels, s.segment_delta, s.segment_area,
                                    s.segment_jump)
     for label in large:
@@ -168,7 +173,7 @@ def _segment_planes(out: np.ndarray, confidence: np.ndarray, left: np.ndarray,
                                                     dtype=np.float32)[:, None]
                   + np.float32(plane.c))
         with np.errstate(invalid="ignore"):
-            move = mask[box] & ~(np.abs(values - out[box]) <= s.segment_move)
+            move = mask[box] & ~kept[box] & ~(np.abs(values - out[box]) <= s.segment_move)
         out[box][move] = values[move]
         np.minimum(confidence[box], np.float32(s.bridge_confidence), out=confidence[box],
                    where=move)
@@ -240,6 +245,23 @@ def view_contrast(view: np.ndarray) -> float:
     counts = np.cumsum(np.bincount(grey_levels(view).ravel(), minlength=256))
     low, high = np.searchsorted(counts, [0.1 * counts[-1], 0.9 * counts[-1]])
     return float(high - low)
+
+
+def in_shadow(view: np.ndarray, levels: int, share: float, window: int) -> np.ndarray:
+    """Where ``view`` lies in a shadow: its mean grey level over a box of 1/``window`` of
+    the view's width (on the view reduced ``levels`` times) below ``share`` of the view's
+    median. A view dark all over has no shadow: its median is dark too."""
+    grey = grey_levels(view)
+    median = max(1.0, float(np.median(grey)))
+    reduced = grey.astype(np.float32)
+    for _ in range(levels):
+        reduced = cv2.pyrDown(reduced)
+    side = max(3, reduced.shape[1] // window) | 1
+    light = cv2.blur(reduced, (side, side), borderType=cv2.BORDER_REFLECT)
+    # Its share of the level, at most 1, brought to full size: a shadow's edge cells reach
+    # half a cell further out than a comparison on the cells would.
+    dimmed = np.minimum(light / np.float32(share * median), np.float32(1.0))
+    return cv2.resize(dimmed, view.shape[1::-1], interpolation=cv2.INTER_LINEAR) < 1.0
 
 
 def _shrunk(value: float, contrast: float, reference: float | None) -> float:

@@ -149,3 +149,36 @@ def wires_pair(thickness: int = 3, spacing: int = 40, width: int = 480, height: 
     nonocc = xs[None, :] >= disparity
     return SyntheticPair(views[0], views[1], disparity, nonocc,
                          int(np.ceil(max(wall, wires))) + 24)
+
+
+def darkened(view: np.ndarray, gain: float, sigma: float, seed: int,
+             gamma: float = 1.0) -> np.ndarray:
+    """``view`` with its grey levels raised to ``gamma`` (as fractions of 255), scaled by
+    ``gain``, and its own sensor noise of ``sigma`` grey levels (seeded by ``seed``), as an
+    unlit scene or a short exposure records it: the noise does not shrink with the light."""
+    noise = np.random.default_rng(seed).normal(0.0, sigma, view.shape)
+    levels = view if gamma == 1.0 else 255.0 * (view / 255.0) ** gamma
+    return np.clip(np.rint(levels * gain + noise), 0, 255).astype(np.uint8)
+
+
+def shadowed(left: np.ndarray, right: np.ndarray, ground_truth: np.ndarray,
+             gain: float = 0.12, sigma: float = 1.0
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A real pair with the lower half of the left view's left quarter in deep shadow: its
+    grey levels scaled by ``gain`` there, and at the same scene points of the right view
+    (found by ``ground_truth``, the left view's disparity; a pixel's neighbours too), then
+    both views given their own sensor noise of ``sigma``. Returns the two views and the
+    shadowed region of the left view."""
+    height, width = left.shape[:2]
+    region = np.zeros((height, width), bool)
+    region[height // 2:, :width // 4] = True
+    left, right = (v.astype(np.float32) for v in (left, right))
+    left[region] *= gain
+    known = np.nan_to_num(ground_truth, posinf=0) > 0
+    ys, xs = np.nonzero(region & known)
+    columns = np.rint(xs - ground_truth[ys, xs]).astype(int)
+    inside = columns >= 0
+    seen = np.zeros(region.shape, np.uint8)
+    seen[ys[inside], columns[inside]] = 1
+    right[cv2.dilate(seen, np.ones((3, 3), np.uint8)).astype(bool)] *= gain
+    return darkened(left, 1.0, sigma, 1), darkened(right, 1.0, sigma, 2), region
