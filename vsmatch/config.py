@@ -264,7 +264,7 @@ class SurfacesConfig:
     take_contrast: float | None = _param(None, 1.0, 255.0, nullable=True, doc=(
         "A view's contrast below which take shrinks in proportion; null: take whatever "
         "the contrast."))
-    shadow: float | None = _param(None, 0.0, 1.0, nullable=True, doc=(
+    shadow: float | None = _param(None, 0.01, 1.0, nullable=True, doc=(
         "A pixel whose neighbourhood's mean grey level (a box of 1/shadow_window of the "
         "view's width, on the view reduced levels times) is below this share of the view's "
         "median lies in a shadow and keeps its own match, unless it is flat: no plane, "

@@ -29,6 +29,11 @@ one colour threshold along their whole length: a wall whose shading changes by m
 With ``segments``, last, a blank segment of the view (``vsmatch.segments``) where the match
 found almost nothing sure takes the plane its edge's sure pixels show, where its pixels lie
 off it: a white wall wider than every region, sure nowhere but along its skirting board.
+
+None of these steps replaces a pixel in a shadow (``shadow``: the view's light around it
+well below the view's median) that has texture: a dark object there is matched mostly
+right, but its shallow cost curves read unsure, and a wide region grown across its faint
+texture would carry the background's plane over it.
 """
 
 from __future__ import annotations
