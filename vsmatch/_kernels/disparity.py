@@ -61,7 +61,9 @@ def winner_takes_all_both(volume, lo, count, out_l, out_r, exclude, out_best, ou
     """
     height, width, _ = volume.shape
     # The bands' largest first candidate plus their largest count: every right pixel's
-    # candidates lie below it. Loops, not lo.max(): NumPy's max costs 0.75 s to compile.
+    # candidates lie below it. Loops, not lo.max(): in a parallel kernel Numba makes an
+    # array's max a parallel reduction of its own (this kernel compiled in 6.1 s, 3.4-4.4 s
+    # without).
     lo_max = np.int64(0)
     count_max = np.int64(1)
     if height * width > 0:
