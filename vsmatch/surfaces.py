@@ -76,7 +76,8 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     as matched (after any exposure correction), ``colour_weight`` the colour term's weight
     it was matched with."""
     s = cfg.surfaces
-    contrast = view_contrast(left)
+    grey = grey_levels(left)  # the view's contrast, texture and shadows read it
+    contrast = view_contrast(grey)
     arms = arms_grown_below(left, _wide_arms(cfg.arms, s, contrast), s.levels)
     # Longer arms, for what the regions above leave: beyond arms.l1 their threshold is
     # arms.tau3, stricter, and on a wall's shading they stop there (56 px at full size).
@@ -85,12 +86,12 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     disp = np.ascontiguousarray(disp, dtype=np.float32)
     # Where the view has no texture at all the match saw nothing: whatever its confidence
     # (the colour term can find a faint shading's brightness a few pixels off), unsure.
-    flat = (texture(grey_levels(left)) < s.flat if s.flat is not None
+    flat = (texture(grey) < s.flat if s.flat is not None
             else np.zeros(disp.shape, bool))
     sure = (labels == VALID) & np.isfinite(disp) & (confidence >= s.fit) & ~flat
     # A pixel in a shadow keeps its own match unless it has no texture at all: its cost
     # curves are shallow, so its confidence reads low, though the match is mostly right.
-    kept = (in_shadow(left, s.levels, s.shadow, s.shadow_window) & ~flat
+    kept = (in_shadow(grey, s.levels, s.shadow, s.shadow_window) & ~flat
             if s.shadow is not None else np.zeros(disp.shape, bool))
     was_unsure = ((confidence < _shrunk(s.take, contrast, s.take_contrast)) | flat) & ~kept
     plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier)
