@@ -9,6 +9,7 @@ import numpy as np
 from ._kernels.aggregate import LANES, sum_along_arms, sum_over_arms, sum_over_lanes
 from ._kernels.arms import DOWN, LEFT, RIGHT, UP
 from ._kernels.arms import cross_arms as _cross_arms_kernel
+from ._kernels.rows import thread_classes
 from .bands import Bands, of
 from .config import ArmsConfig
 from .images import as_channels, colour_change, downsample, mirrored, to_grey, upsample_nearest
@@ -99,10 +100,10 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
         elif narrow:
             sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, bands.lo,
                           bands.count, none if normalise else sizes,
-                          sizes if normalise else none, out)
+                          sizes if normalise else none, thread_classes(), out)
         elif method == "direct":
             sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, bands.lo,
-                          bands.count, none, none, out)
+                          bands.count, none, none, thread_classes(), out)
         else:
             sum_along_arms(src, arms_l, arms_r_rev, along_rows, normalise, out)
 

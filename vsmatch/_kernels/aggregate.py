@@ -4,6 +4,7 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS
 from .arms import DOWN, LEFT, RIGHT, UP
 from .lanes import LANES, add_in_lanes, copy_lanes, divide_lanes
+from .rows import dealt
 
 
 @njit(inline="always")
@@ -25,7 +26,7 @@ def _arms_across(arms_l, arms_r_rev, first_lo, first_hi, y, x, base):
 
 @njit(**KERNEL_OPTIONS)
 def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, counts_out,
-                  counts_in, out):
+                  counts_in, classes, out):
     """:func:`sum_along_arms` by direct sums: each pixel adds its arm pixels' costs.
 
     The work is proportional to the arm lengths rather than to one running sum per pixel,
@@ -40,7 +41,8 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
     pixel adds to the disparities its own band holds too. Where the bands differ, the
     regions' sizes are counted as the sums are taken: the first pass writes them to
     ``counts_out`` and the second divides by the sums of ``counts_in`` over its arms (empty
-    arrays: the whole range everywhere, every region's size known from the arms).
+    arrays: the whole range everywhere, every region's size known from the arms). Rows are
+    dealt into ``classes`` (``rows.dealt``): a stream's frame searches a few rows' pixels.
     """
     height, width, depth = src.shape
     lo_arm = LEFT if along_rows else UP
@@ -55,7 +57,8 @@ def sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, lo, count, cou
     # Bands of at most LANES candidates in a volume at least as deep: summed LANES at a
     # time, the lanes past a band unused.
     narrow = (count_here or counted) and depth >= LANES
-    for y in prange(height):
+    for i in prange(height):
+        y = dealt(i, height, classes)
         total = np.zeros(max(depth, LANES), dtype=np.float32)
         size = np.ones(max(depth, LANES), dtype=np.float32)
         ones = np.ones(LANES, dtype=np.float32)  # each pixel counts as one
