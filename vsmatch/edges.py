@@ -61,8 +61,23 @@ def _weigh_block(disp: np.ndarray, left: np.ndarray, right: np.ndarray,
     grad_r = np.ascontiguousarray(sobel(grey_r)[0] / np.float32(SOBEL_GAIN))
     skip = np.ascontiguousarray(texture(grey_l) < cfg.min_texture)
     out = np.empty_like(disp)
-    weigh_edge_sides(np.ascontiguousarray(disp), as_channels(left), as_channels(right),
-                     grad_l, grad_r, skip, cfg.radius, cfg.colour_scale, cfg.distance_scale,
-                     cfg.gradient_share, cfg.colour_cap, cfg.gradient_cap, cfg.reach,
-                     cfg.jump, cfg.margin, thread_classes(), out)
+    weigh_edge_sides(np.ascontiguousarray(disp), _planes(left), _planes(right, pad=1),
+                     grad_l, _padded(grad_r), skip, cfg.radius, cfg.colour_scale,
+                     cfg.distance_scale, cfg.gradient_share, cfg.colour_cap, cfg.gradient_cap,
+                     cfg.reach, cfg.jump, cfg.margin, thread_classes(), out)
     return out
+
+
+def _planes(view: np.ndarray, pad: int = 0) -> np.ndarray:
+    """``view``'s channels as (C, H, W + ``pad``) uint8 planes, the last column repeated
+    ``pad`` times: a window row's pixels of one channel lie side by side."""
+    view = as_channels(view)
+    planes = np.empty((view.shape[2], view.shape[0], view.shape[1] + pad), np.uint8)
+    planes[:, :, :view.shape[1]] = np.moveaxis(view, 2, 0)
+    planes[:, :, view.shape[1]:] = planes[:, :, view.shape[1] - 1:view.shape[1]]
+    return planes
+
+
+def _padded(values: np.ndarray) -> np.ndarray:
+    """(H, W) ``values`` with their last column repeated once more, (H, W + 1)."""
+    return np.ascontiguousarray(np.concatenate([values, values[:, -1:]], axis=1))

@@ -8,6 +8,12 @@ from .rows import dealt
 MAX_CANDIDATES = 3
 
 
+@njit(inline="always")
+def _shorter(a, b):
+    # A conditional expression, not min(): Numba's min stops LLVM vectorising the loop.
+    return a if a < b else b
+
+
 @njit(**KERNEL_OPTIONS)
 def weigh_edge_sides(disp, left, right, grad_l, grad_r, skip, radius, colour_scale,
                      distance_scale, gradient_share, colour_cap, gradient_cap, reach, jump,
@@ -21,10 +27,12 @@ def weigh_edge_sides(disp, left, right, grad_l, grad_r, skip, radius, colour_sca
     min(x-gradient difference, ``gradient_cap``) at the candidate's disparity (the right
     view interpolated between columns). A candidate from a side must cost less than the
     pixel's own by the share ``margin``. Every candidate is weighed over the same window
-    pixels, those all of them see in the right view. ``left``/``right``: (H, W, C) uint8;
-    ``grad_*``: x-gradient, grey levels a pixel; ``skip``: pixels left as they are."""
+    pixels, those all of them see in the right view. ``left``: (C, H, W) uint8 planes;
+    ``right`` and ``grad_r``: (C, H, W + 1) and (H, W + 1), the last column repeated (a
+    match at the last column interpolates with itself); ``grad_*``: x-gradient, grey
+    levels a pixel; ``skip``: pixels left as they are."""
     height, width = disp.shape
-    channels = left.shape[2]
+    channels = left.shape[0]
     # The weights' two factors, looked up: the colour difference summed over the channels
     # is a whole number of grey levels, the distance a whole number of pixels.
     by_colour = np.exp(-np.arange(255 * channels + 1) / channels / colour_scale)
@@ -33,6 +41,10 @@ def weigh_edge_sides(disp, left, right, grad_l, grad_r, skip, radius, colour_sca
         y = dealt(i, height, classes)
         candidates = np.empty(MAX_CANDIDATES, np.float64)
         totals = np.empty(MAX_CANDIDATES, np.float64)
+        shifts = np.empty(MAX_CANDIDATES, np.int64)
+        fractions = np.empty(MAX_CANDIDATES, np.float64)
+        weights_row = np.empty(2 * radius + 1, np.float64)
+        costs_row = np.empty((MAX_CANDIDATES, 2 * radius + 1), np.float64)
         for x in range(width):
             own = disp[y, x]
             out[y, x] = own
@@ -53,41 +65,66 @@ def weigh_edge_sides(disp, left, right, grad_l, grad_r, skip, radius, colour_sca
             if count == 1:
                 continue
             # Every candidate is weighed over the window pixels all of them see in the right
-            # view (the own disparity is the largest), with one set of weights.
+            # view (the own disparity is the largest), with one set of weights: columns
+            # qx >= nearest and qx - farthest <= W - 1.
             nearest = candidates[0]
             farthest = candidates[0]
             for c in range(1, count):
                 farthest = min(farthest, candidates[c])
+            first = max(x - radius, 0, np.int64(np.ceil(nearest)))
+            last = min(x + radius, width - 1, np.int64(np.floor(farthest + width - 1)))
+            span = last + 1 - first
             for c in range(count):
                 totals[c] = 0.0
+                # qx - candidate is exact in float64: its whole part moves with qx, its
+                # fraction is the same over the window.
+                whole = np.floor(-candidates[c])
+                shifts[c] = np.int64(whole)
+                fractions[c] = -candidates[c] - whole
             weights = 0.0
             for dy in range(-radius, radius + 1):
                 qy = y + dy
-                if qy < 0 or qy >= height:
+                if qy < 0 or qy >= height or span <= 0:
                     continue
-                for dx in range(-radius, radius + 1):
-                    qx = x + dx
-                    if qx < 0 or qx >= width or qx - nearest < 0 or qx - farthest > width - 1:
-                        continue
+                # A window row's weights and costs at once, in loops that vectorise (the
+                # channels written out), then summed in the window's order.
+                ady = dy if dy >= 0 else -dy
+                for j in range(span):
+                    qx = first + j
                     similar = 0
                     for ch in range(channels):
-                        similar += abs(np.int64(left[y, x, ch]) - np.int64(left[qy, qx, ch]))
-                    w = by_colour[similar] * by_distance[abs(dx) + abs(dy)]
-                    weights += w
+                        similar += abs(np.int64(left[ch, y, x]) - np.int64(left[ch, qy, qx]))
+                    dx = qx - x
+                    weights_row[j] = (by_colour[similar]
+                                      * by_distance[(dx if dx >= 0 else -dx) + ady])
+                for c in range(count):
+                    f = fractions[c]
+                    g = 1.0 - f
+                    at = first + shifts[c]  # the right column left of the first's match
+                    for j in range(span):
+                        qx = first + j
+                        x0 = at + j
+                        if channels == 3:
+                            colour = abs(np.float64(left[0, qy, qx])
+                                         - (g * right[0, qy, x0] + f * right[0, qy, x0 + 1]))
+                            colour += abs(np.float64(left[1, qy, qx])
+                                          - (g * right[1, qy, x0] + f * right[1, qy, x0 + 1]))
+                            colour += abs(np.float64(left[2, qy, qx])
+                                          - (g * right[2, qy, x0] + f * right[2, qy, x0 + 1]))
+                        else:
+                            colour = 0.0
+                            for ch in range(channels):
+                                colour += abs(np.float64(left[ch, qy, qx]) - (
+                                    g * right[ch, qy, x0] + f * right[ch, qy, x0 + 1]))
+                        colour = _shorter(colour / channels, colour_cap)
+                        shown_grad = g * grad_r[qy, x0] + f * grad_r[qy, x0 + 1]
+                        gradient = _shorter(abs(grad_l[qy, qx] - shown_grad), gradient_cap)
+                        costs_row[c, j] = weights_row[j] * ((1.0 - gradient_share) * colour
+                                                            + gradient_share * gradient)
+                for j in range(span):
+                    weights += weights_row[j]
                     for c in range(count):
-                        xr = qx - candidates[c]
-                        x0 = int(np.floor(xr))
-                        f = xr - x0
-                        x1 = min(x0 + 1, width - 1)
-                        colour = 0.0
-                        for ch in range(channels):
-                            shown = (1.0 - f) * right[qy, x0, ch] + f * right[qy, x1, ch]
-                            colour += abs(np.float64(left[qy, qx, ch]) - shown)
-                        colour = min(colour / channels, colour_cap)
-                        shown_grad = (1.0 - f) * grad_r[qy, x0] + f * grad_r[qy, x1]
-                        gradient = min(abs(grad_l[qy, qx] - shown_grad), gradient_cap)
-                        totals[c] += w * ((1.0 - gradient_share) * colour
-                                          + gradient_share * gradient)
+                        totals[c] += costs_row[c, j]
             if weights <= 0:
                 continue
             best = own
