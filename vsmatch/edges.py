@@ -70,7 +70,8 @@ def _weigh_block(disp: np.ndarray, left: np.ndarray, right: np.ndarray,
 
 def _planes(view: np.ndarray, pad: int = 0) -> np.ndarray:
     """``view``'s channels as (C, H, W + ``pad``) uint8 planes, the last column repeated
-    ``pad`` times: a window row's pixels of one channel lie side by side."""
+    ``pad`` times: a window row's pixels of one channel lie side by side, and a match at the
+    last column reads its right neighbour (weighed 0) inside the array."""
     view = as_channels(view)
     planes = np.empty((view.shape[2], view.shape[0], view.shape[1] + pad), np.uint8)
     planes[:, :, :view.shape[1]] = np.moveaxis(view, 2, 0)

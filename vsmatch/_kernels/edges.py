@@ -29,8 +29,8 @@ def weigh_edge_sides(disp, left, right, grad_l, grad_r, skip, radius, colour_sca
     pixel's own by the share ``margin``. Every candidate is weighed over the same window
     pixels, those all of them see in the right view. ``left``: (C, H, W) uint8 planes;
     ``right`` and ``grad_r``: (C, H, W + 1) and (H, W + 1), the last column repeated (a
-    match at the last column interpolates with itself); ``grad_*``: x-gradient, grey
-    levels a pixel; ``skip``: pixels left as they are."""
+    match at the last column has fraction 0 and reads one column past it, weighed 0);
+    ``grad_*``: x-gradient, grey levels a pixel; ``skip``: pixels left as they are."""
     height, width = disp.shape
     channels = left.shape[0]
     # The weights' two factors, looked up: the colour difference summed over the channels
