@@ -9,9 +9,9 @@ MAX_CANDIDATES = 3
 
 
 @njit(inline="always")
-def _shorter(a, b):
+def _capped(value, cap):
     # A conditional expression, not min(): Numba's min stops LLVM vectorising the loop.
-    return a if a < b else b
+    return value if value < cap else cap
 
 
 @njit(**KERNEL_OPTIONS)
@@ -116,9 +116,9 @@ def weigh_edge_sides(disp, left, right, grad_l, grad_r, skip, radius, colour_sca
                             for ch in range(channels):
                                 colour += abs(np.float64(left[ch, qy, qx]) - (
                                     g * right[ch, qy, x0] + f * right[ch, qy, x0 + 1]))
-                        colour = _shorter(colour / channels, colour_cap)
+                        colour = _capped(colour / channels, colour_cap)
                         shown_grad = g * grad_r[qy, x0] + f * grad_r[qy, x0 + 1]
-                        gradient = _shorter(abs(grad_l[qy, qx] - shown_grad), gradient_cap)
+                        gradient = _capped(abs(grad_l[qy, qx] - shown_grad), gradient_cap)
                         costs_row[c, j] = weights_row[j] * ((1.0 - gradient_share) * colour
                                                             + gradient_share * gradient)
                 for j in range(span):
