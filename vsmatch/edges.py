@@ -61,24 +61,20 @@ def _weigh_block(disp: np.ndarray, left: np.ndarray, right: np.ndarray,
     grad_r = np.ascontiguousarray(sobel(grey_r)[0] / np.float32(SOBEL_GAIN))
     skip = np.ascontiguousarray(texture(grey_l) < cfg.min_texture)
     out = np.empty_like(disp)
-    weigh_edge_sides(np.ascontiguousarray(disp), _planes(left), _planes(right, pad=1),
+    weigh_edge_sides(np.ascontiguousarray(disp), _planes(left), _padded(_planes(right)),
                      grad_l, _padded(grad_r), skip, cfg.radius, cfg.colour_scale,
                      cfg.distance_scale, cfg.gradient_share, cfg.colour_cap, cfg.gradient_cap,
                      cfg.reach, cfg.jump, cfg.margin, thread_classes(), out)
     return out
 
 
-def _planes(view: np.ndarray, pad: int = 0) -> np.ndarray:
-    """``view``'s channels as (C, H, W + ``pad``) uint8 planes, the last column repeated
-    ``pad`` times: a window row's pixels of one channel lie side by side, and a match at the
-    last column reads its right neighbour (weighed 0) inside the array."""
-    view = as_channels(view)
-    planes = np.empty((view.shape[2], view.shape[0], view.shape[1] + pad), np.uint8)
-    planes[:, :, :view.shape[1]] = np.moveaxis(view, 2, 0)
-    planes[:, :, view.shape[1]:] = planes[:, :, view.shape[1] - 1:view.shape[1]]
-    return planes
+def _planes(view: np.ndarray) -> np.ndarray:
+    """``view``'s channels as (C, H, W) uint8 planes: a window row's pixels of one channel
+    lie side by side."""
+    return np.ascontiguousarray(np.moveaxis(as_channels(view), 2, 0))
 
 
 def _padded(values: np.ndarray) -> np.ndarray:
-    """(H, W) ``values`` with their last column repeated once more, (H, W + 1)."""
-    return np.ascontiguousarray(np.concatenate([values, values[:, -1:]], axis=1))
+    """``values`` with their last column repeated once more (C-contiguous): a match at the
+    last column reads its right neighbour (weighed 0) inside the array."""
+    return np.concatenate([values, values[..., -1:]], axis=-1)
