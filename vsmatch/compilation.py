@@ -37,6 +37,7 @@ def kernel_dispatchers() -> dict:
     """Every kernel of ``vsmatch._kernels`` by a stable name: ``module.attribute``, and
     ``module.attribute[key]`` for the kernels a module keeps in a dict (built by a factory,
     one per variant)."""
+    from numba.core.caching import NullCache
     from numba.core.registry import CPUDispatcher
 
     from . import _kernels
@@ -47,8 +48,10 @@ def kernel_dispatchers() -> dict:
         for attr, value in sorted(vars(module).items()):
             entries = value.items() if isinstance(value, dict) else [(None, value)]
             for key, dispatcher in entries:
+                # A loop body compiled with its kernel (``ROW_OPTIONS``) is not cached on
+                # its own: not a kernel to compile ahead.
                 if isinstance(dispatcher, CPUDispatcher) and dispatcher.__module__ == \
-                        module.__name__:
+                        module.__name__ and not isinstance(dispatcher._cache, NullCache):
                     name = f"{info.name}.{attr}" + ("" if key is None else f"[{key!r}]")
                     found[name] = dispatcher
     return found

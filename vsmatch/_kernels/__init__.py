@@ -11,6 +11,13 @@ KERNEL_OPTIONS = dict(parallel=True, cache=True, nogil=True, error_model="numpy"
 #: Small kernels that stand for a few NumPy passes over a view: one fused loop, compiled
 #: without Numba's parallel passes (3-4x faster to compile; each counts in a first run).
 SERIAL_OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
+#: A parallel kernel's loop body as a function of its own (``for y in prange(n): body(.., y)``):
+#: Numba's parallel passes then see a one-line loop and the body compiles once, as serial
+#: code, which cut the compiling of `default`'s kernels by a sixth. Not cached on its own:
+#: it is compiled into the kernel that calls it. Left inline where the code came out slower
+#: (the cost volume, the lanes' scanlines): a parallel loop's arrays are taken not to
+#: overlap, a function's may.
+ROW_OPTIONS = dict(nogil=True, error_model="numpy")
 
 
 def cache_is_cold() -> bool:

@@ -1,7 +1,27 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS
+from . import KERNEL_OPTIONS, ROW_OPTIONS
+
+
+@njit(**ROW_OPTIONS)
+def _census_of_row(padded, half_w, half_h, band, out, width, y):
+    """:func:`census_transform` of row ``y``."""
+    bits = np.zeros(width, dtype=np.uint64)
+    centre = np.empty(width, dtype=np.float32)
+    centre_row = padded[y + half_h, half_w:half_w + width]
+    for x in range(width):
+        centre[x] = centre_row[x] - band
+    for dy in range(-half_h, half_h + 1):
+        row = padded[y + half_h + dy]
+        for dx in range(-half_w, half_w + 1):
+            if dy == 0 and dx == 0:
+                continue
+            neighbour = row[half_w + dx:half_w + dx + width]
+            for x in range(width):
+                bits[x] = (bits[x] << np.uint64(1)) | np.uint64(neighbour[x] < centre[x])
+    for x in range(width):
+        out[y, x] = bits[x]
 
 
 @njit(**KERNEL_OPTIONS)
@@ -14,21 +34,7 @@ def census_transform(padded, half_w, half_h, band, out):
     """
     height, width = out.shape
     for y in prange(height):
-        bits = np.zeros(width, dtype=np.uint64)
-        centre = np.empty(width, dtype=np.float32)
-        centre_row = padded[y + half_h, half_w:half_w + width]
-        for x in range(width):
-            centre[x] = centre_row[x] - band
-        for dy in range(-half_h, half_h + 1):
-            row = padded[y + half_h + dy]
-            for dx in range(-half_w, half_w + 1):
-                if dy == 0 and dx == 0:
-                    continue
-                neighbour = row[half_w + dx:half_w + dx + width]
-                for x in range(width):
-                    bits[x] = (bits[x] << np.uint64(1)) | np.uint64(neighbour[x] < centre[x])
-        for x in range(width):
-            out[y, x] = bits[x]
+        _census_of_row(padded, half_w, half_h, band, out, width, np.int64(y))
 
 
 @njit(inline="always")

@@ -1,7 +1,7 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS, SERIAL_OPTIONS
+from . import KERNEL_OPTIONS, ROW_OPTIONS, SERIAL_OPTIONS
 from .rows import dealt
 
 
@@ -51,6 +51,26 @@ def cost_curve(volume, lo, count, disp, exclude, out_best, out_second, out_mean)
             out_mean[y, x] = mean
 
 
+@njit(**ROW_OPTIONS)
+def _logistic_of_row(features, weights, out, n, width, y):
+    """:func:`logistic` of row ``y``."""
+    # A row at a time, each term a pass along it: the passes vectorise (7x faster
+    # than a pixel's terms at a time, the same sums in the same order).
+    score = np.zeros(width, np.float32)
+    inner = np.empty(width, np.float32)
+    for i in range(n):
+        inner[:] = 0.0
+        for j in range(i, n):
+            w = weights[i, j]
+            for x in range(width):
+                inner[x] += w * features[j, y, x]
+        for x in range(width):
+            score[x] += features[i, y, x] * inner[x]
+    for x in range(width):
+        clipped = min(np.float32(30.0), max(np.float32(-30.0), score[x]))
+        out[y, x] = np.float32(1.0) / (np.float32(1.0) + np.exp(-clipped))
+
+
 @njit(**KERNEL_OPTIONS)
 def logistic(features, weights, out):
     """out = 1 / (1 + exp(-clip(score, -30, 30))), the score the quadratic form
@@ -58,21 +78,7 @@ def logistic(features, weights, out):
     constant 1: that row holds the bias and the linear weights), in float32."""
     n, height, width = features.shape
     for y in prange(height):
-        # A row at a time, each term a pass along it: the passes vectorise (7x faster
-        # than a pixel's terms at a time, the same sums in the same order).
-        score = np.zeros(width, np.float32)
-        inner = np.empty(width, np.float32)
-        for i in range(n):
-            inner[:] = 0.0
-            for j in range(i, n):
-                w = weights[i, j]
-                for x in range(width):
-                    inner[x] += w * features[j, y, x]
-            for x in range(width):
-                score[x] += features[i, y, x] * inner[x]
-        for x in range(width):
-            clipped = min(np.float32(30.0), max(np.float32(-30.0), score[x]))
-            out[y, x] = np.float32(1.0) / (np.float32(1.0) + np.exp(-clipped))
+        _logistic_of_row(features, weights, out, n, width, np.int64(y))
 
 
 @njit(**KERNEL_OPTIONS)
@@ -88,6 +94,26 @@ def rival_offsets(volume, disp, best, second, mean, hump, level, floor, reach, o
                                      floor, reach)
 
 
+@njit(**ROW_OPTIONS)
+def _curves_and_rivals_of_row(volume, disp, exclude, hump, level, floor, reach, out_best,
+                              out_second, out_mean, out_offset, width, depth, y):
+    """:func:`cost_curve_and_rivals` of row ``y``."""
+    for x in range(width):  # the row's curves, then its rivals (the row still in cache)
+        inside = min(depth, x + 1)
+        d1 = np.int64(disp[y, x])
+        if d1 < 0 or d1 >= depth:  # as cost_curve: a winner out of view has a curve
+            out_best[y, x] = out_second[y, x] = out_mean[y, x] = 0.0
+            continue
+        best, second, mean = curve_at(volume[y, x], d1, inside, exclude)
+        out_best[y, x] = best
+        out_second[y, x] = second
+        out_mean[y, x] = mean
+    for x in range(width):
+        out_offset[y, x] = rival_offset(volume[y, x], disp[y, x], min(depth, x + 1),
+                                        out_best[y, x], out_second[y, x],
+                                        out_mean[y, x], hump, level, floor, reach)
+
+
 @njit(**KERNEL_OPTIONS)
 def cost_curve_and_rivals(volume, disp, exclude, hump, level, floor, reach, out_best,
                           out_second, out_mean, out_offset):
@@ -95,20 +121,8 @@ def cost_curve_and_rivals(volume, disp, exclude, hump, level, floor, reach, out_
     one pass: the curve is walked for a rival while it is in cache."""
     height, width, depth = volume.shape
     for y in prange(height):
-        for x in range(width):  # the row's curves, then its rivals (the row still in cache)
-            inside = min(depth, x + 1)
-            d1 = np.int64(disp[y, x])
-            if d1 < 0 or d1 >= depth:  # as cost_curve: a winner out of view has a curve
-                out_best[y, x] = out_second[y, x] = out_mean[y, x] = 0.0
-                continue
-            best, second, mean = curve_at(volume[y, x], d1, inside, exclude)
-            out_best[y, x] = best
-            out_second[y, x] = second
-            out_mean[y, x] = mean
-        for x in range(width):
-            out_offset[y, x] = rival_offset(volume[y, x], disp[y, x], min(depth, x + 1),
-                                            out_best[y, x], out_second[y, x],
-                                            out_mean[y, x], hump, level, floor, reach)
+        _curves_and_rivals_of_row(volume, disp, exclude, hump, level, floor, reach, out_best,
+                                  out_second, out_mean, out_offset, width, depth, np.int64(y))
 
 
 @njit(inline="always")

@@ -1,7 +1,7 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS
+from . import KERNEL_OPTIONS, ROW_OPTIONS
 from .rows import dealt
 from .arms import colour_distance
 from .confidence import curve_at
@@ -45,6 +45,45 @@ def winner_takes_all(volume, lo, count, out):
             out[y, x] = lo[y, x] + _argmin(volume[y, x], n) if n > 0 else NO_DISPARITY
 
 
+@njit(**ROW_OPTIONS)
+def _both_of_row(volume, lo, count, out_l, out_r, exclude, out_best, out_second, out_mean,
+                 n_disp, y):
+    """:func:`winner_takes_all_both` of row ``y`` (``n_disp``: past every band's end)."""
+    width = volume.shape[1]
+    curve = out_best.shape[0] > 0
+    best_r = np.full(width + n_disp, np.inf, dtype=volume.dtype)
+    best_rd = np.full(width + n_disp, NO_DISPARITY, dtype=np.int32)
+    # Reversed: right pixel xr is at width - 1 - xr, so x - d lies forward in memory.
+    for x in range(width):
+        costs = volume[y, x]
+        base = np.int64(lo[y, x])
+        n = np.int64(count[y, x])
+        out_l[y, x] = base + _argmin(costs, n) if n > 0 else NO_DISPARITY
+        # Views from the band's place on: indexes Numba knows are >= 0 stay affine.
+        cost_r = best_r[width - 1 - x + base:]
+        disp_r = best_rd[width - 1 - x + base:]
+        for k in range(min(n, x + 1 - base)):
+            c = costs[k]
+            b = cost_r[k]
+            take = c < b
+            cost_r[k] = c if take else b
+            disp_r[k] = np.int32(base + k) if take else disp_r[k]
+    for x in range(width):
+        out_r[y, x] = best_rd[width - 1 - x]
+    if curve:  # the row's costs are still in cache; apart, the loop above vectorises
+        for x in range(width):
+            base = np.int64(lo[y, x])
+            inside = min(np.int64(count[y, x]), x + 1 - base)
+            if inside <= 0:
+                out_best[y, x] = out_second[y, x] = out_mean[y, x] = 0.0
+                continue
+            best, second, mean = curve_at(volume[y, x], out_l[y, x] - base, inside,
+                                          exclude)
+            out_best[y, x] = best
+            out_second[y, x] = second
+            out_mean[y, x] = mean
+
+
 @njit(**KERNEL_OPTIONS)
 def winner_takes_all_both(volume, lo, count, out_l, out_r, exclude, out_best, out_second,
                           out_mean):
@@ -74,39 +113,9 @@ def winner_takes_all_both(volume, lo, count, out_l, out_r, exclude, out_best, ou
                 lo_max = max(lo_max, np.int64(lo[y, x]))
                 count_max = max(count_max, np.int64(count[y, x]))
     n_disp = lo_max + count_max
-    curve = out_best.shape[0] > 0
     for y in prange(height):
-        best_r = np.full(width + n_disp, np.inf, dtype=volume.dtype)
-        best_rd = np.full(width + n_disp, NO_DISPARITY, dtype=np.int32)
-        # Reversed: right pixel xr is at width - 1 - xr, so x - d lies forward in memory.
-        for x in range(width):
-            costs = volume[y, x]
-            base = np.int64(lo[y, x])
-            n = np.int64(count[y, x])
-            out_l[y, x] = base + _argmin(costs, n) if n > 0 else NO_DISPARITY
-            # Views from the band's place on: indexes Numba knows are >= 0 stay affine.
-            cost_r = best_r[width - 1 - x + base:]
-            disp_r = best_rd[width - 1 - x + base:]
-            for k in range(min(n, x + 1 - base)):
-                c = costs[k]
-                b = cost_r[k]
-                take = c < b
-                cost_r[k] = c if take else b
-                disp_r[k] = np.int32(base + k) if take else disp_r[k]
-        for x in range(width):
-            out_r[y, x] = best_rd[width - 1 - x]
-        if curve:  # the row's costs are still in cache; apart, the loop above vectorises
-            for x in range(width):
-                base = np.int64(lo[y, x])
-                inside = min(np.int64(count[y, x]), x + 1 - base)
-                if inside <= 0:
-                    out_best[y, x] = out_second[y, x] = out_mean[y, x] = 0.0
-                    continue
-                best, second, mean = curve_at(volume[y, x], out_l[y, x] - base, inside,
-                                              exclude)
-                out_best[y, x] = best
-                out_second[y, x] = second
-                out_mean[y, x] = mean
+        _both_of_row(volume, lo, count, out_l, out_r, exclude, out_best, out_second, out_mean,
+                     n_disp, np.int64(y))
 
 
 @njit(**KERNEL_OPTIONS)

@@ -1,7 +1,7 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS
+from . import KERNEL_OPTIONS, ROW_OPTIONS
 from .rows import dealt
 
 #: Most candidates a pixel weighs: its own disparity and one from each side.
@@ -12,6 +12,110 @@ MAX_CANDIDATES = 3
 def _capped(value, cap):
     # A conditional expression, not min(): Numba's min stops LLVM vectorising the loop.
     return value if value < cap else cap
+
+
+@njit(**ROW_OPTIONS)
+def _edge_sides_of_row(disp, left, right, grad_l, grad_r, skip, radius, colour_scale,
+                       distance_scale, gradient_share, colour_cap, gradient_cap, reach, jump,
+                       margin, classes, out, height, width, channels, by_colour, by_distance, i):
+    """:func:`weigh_edge_sides` of the ``dealt`` row ``i``."""
+    y = dealt(i, height, classes)
+    candidates = np.empty(MAX_CANDIDATES, np.float64)
+    totals = np.empty(MAX_CANDIDATES, np.float64)
+    shifts = np.empty(MAX_CANDIDATES, np.int64)
+    fractions = np.empty(MAX_CANDIDATES, np.float64)
+    weights_row = np.empty(2 * radius + 1, np.float64)
+    costs_row = np.empty((MAX_CANDIDATES, 2 * radius + 1), np.float64)
+    for x in range(width):
+        own = disp[y, x]
+        out[y, x] = own
+        if not np.isfinite(own) or skip[y, x]:
+            continue
+        count = 1
+        candidates[0] = own
+        for side in (-1, 1):
+            for k in range(1, reach + 1):
+                nx = x + side * k
+                if nx < 0 or nx >= width:
+                    break
+                other = disp[y, nx]
+                if np.isfinite(other) and other < own - jump:
+                    candidates[count] = other
+                    count += 1
+                    break
+        if count == 1:
+            continue
+        # Every candidate is weighed over the window pixels all of them see in the right
+        # view (the own disparity is the largest), with one set of weights: columns
+        # qx >= nearest and qx - farthest <= W - 1.
+        nearest = candidates[0]
+        farthest = candidates[0]
+        for c in range(1, count):
+            farthest = min(farthest, candidates[c])
+        first = max(x - radius, 0, np.int64(np.ceil(nearest)))
+        last = min(x + radius, width - 1, np.int64(np.floor(farthest + width - 1)))
+        span = last + 1 - first
+        for c in range(count):
+            totals[c] = 0.0
+            # qx - candidate is exact in float64: its whole part moves with qx, its
+            # fraction is the same over the window.
+            whole = np.floor(-candidates[c])
+            shifts[c] = np.int64(whole)
+            fractions[c] = -candidates[c] - whole
+        weights = 0.0
+        for dy in range(-radius, radius + 1):
+            qy = y + dy
+            if qy < 0 or qy >= height or span <= 0:
+                continue
+            # A window row's weights and costs at once, in loops that vectorise (the
+            # channels written out), then summed in the window's order.
+            ady = dy if dy >= 0 else -dy
+            for j in range(span):
+                qx = first + j
+                similar = 0
+                for ch in range(channels):
+                    similar += abs(np.int64(left[ch, y, x]) - np.int64(left[ch, qy, qx]))
+                dx = qx - x
+                weights_row[j] = (by_colour[similar]
+                                  * by_distance[(dx if dx >= 0 else -dx) + ady])
+            for c in range(count):
+                f = fractions[c]
+                g = 1.0 - f
+                at = first + shifts[c]  # the right column left of the first's match
+                for j in range(span):
+                    qx = first + j
+                    x0 = at + j
+                    if channels == 3:
+                        colour = abs(np.float64(left[0, qy, qx])
+                                     - (g * right[0, qy, x0] + f * right[0, qy, x0 + 1]))
+                        colour += abs(np.float64(left[1, qy, qx])
+                                      - (g * right[1, qy, x0] + f * right[1, qy, x0 + 1]))
+                        colour += abs(np.float64(left[2, qy, qx])
+                                      - (g * right[2, qy, x0] + f * right[2, qy, x0 + 1]))
+                    else:
+                        colour = 0.0
+                        for ch in range(channels):
+                            colour += abs(np.float64(left[ch, qy, qx]) - (
+                                g * right[ch, qy, x0] + f * right[ch, qy, x0 + 1]))
+                    colour = _capped(colour / channels, colour_cap)
+                    shown_grad = g * grad_r[qy, x0] + f * grad_r[qy, x0 + 1]
+                    gradient = _capped(abs(grad_l[qy, qx] - shown_grad), gradient_cap)
+                    costs_row[c, j] = weights_row[j] * ((1.0 - gradient_share) * colour
+                                                        + gradient_share * gradient)
+            for j in range(span):
+                weights += weights_row[j]
+                for c in range(count):
+                    totals[c] += costs_row[c, j]
+        if weights <= 0:
+            continue
+        best = own
+        best_cost = totals[0]
+        for c in range(1, count):
+            # A surface behind must explain the window better by the share margin.
+            if totals[c] * (1.0 + margin) < best_cost:
+                best_cost = totals[c] * (1.0 + margin)
+                best = candidates[c]
+        out[y, x] = best
 
 
 @njit(**KERNEL_OPTIONS)
@@ -38,100 +142,7 @@ def weigh_edge_sides(disp, left, right, grad_l, grad_r, skip, radius, colour_sca
     by_colour = np.exp(-np.arange(255 * channels + 1) / channels / colour_scale)
     by_distance = np.exp(-np.arange(2 * radius + 1) / distance_scale)
     for i in prange(height):  # rows dealt out: only pixels near a step weigh their windows
-        y = dealt(i, height, classes)
-        candidates = np.empty(MAX_CANDIDATES, np.float64)
-        totals = np.empty(MAX_CANDIDATES, np.float64)
-        shifts = np.empty(MAX_CANDIDATES, np.int64)
-        fractions = np.empty(MAX_CANDIDATES, np.float64)
-        weights_row = np.empty(2 * radius + 1, np.float64)
-        costs_row = np.empty((MAX_CANDIDATES, 2 * radius + 1), np.float64)
-        for x in range(width):
-            own = disp[y, x]
-            out[y, x] = own
-            if not np.isfinite(own) or skip[y, x]:
-                continue
-            count = 1
-            candidates[0] = own
-            for side in (-1, 1):
-                for k in range(1, reach + 1):
-                    nx = x + side * k
-                    if nx < 0 or nx >= width:
-                        break
-                    other = disp[y, nx]
-                    if np.isfinite(other) and other < own - jump:
-                        candidates[count] = other
-                        count += 1
-                        break
-            if count == 1:
-                continue
-            # Every candidate is weighed over the window pixels all of them see in the right
-            # view (the own disparity is the largest), with one set of weights: columns
-            # qx >= nearest and qx - farthest <= W - 1.
-            nearest = candidates[0]
-            farthest = candidates[0]
-            for c in range(1, count):
-                farthest = min(farthest, candidates[c])
-            first = max(x - radius, 0, np.int64(np.ceil(nearest)))
-            last = min(x + radius, width - 1, np.int64(np.floor(farthest + width - 1)))
-            span = last + 1 - first
-            for c in range(count):
-                totals[c] = 0.0
-                # qx - candidate is exact in float64: its whole part moves with qx, its
-                # fraction is the same over the window.
-                whole = np.floor(-candidates[c])
-                shifts[c] = np.int64(whole)
-                fractions[c] = -candidates[c] - whole
-            weights = 0.0
-            for dy in range(-radius, radius + 1):
-                qy = y + dy
-                if qy < 0 or qy >= height or span <= 0:
-                    continue
-                # A window row's weights and costs at once, in loops that vectorise (the
-                # channels written out), then summed in the window's order.
-                ady = dy if dy >= 0 else -dy
-                for j in range(span):
-                    qx = first + j
-                    similar = 0
-                    for ch in range(channels):
-                        similar += abs(np.int64(left[ch, y, x]) - np.int64(left[ch, qy, qx]))
-                    dx = qx - x
-                    weights_row[j] = (by_colour[similar]
-                                      * by_distance[(dx if dx >= 0 else -dx) + ady])
-                for c in range(count):
-                    f = fractions[c]
-                    g = 1.0 - f
-                    at = first + shifts[c]  # the right column left of the first's match
-                    for j in range(span):
-                        qx = first + j
-                        x0 = at + j
-                        if channels == 3:
-                            colour = abs(np.float64(left[0, qy, qx])
-                                         - (g * right[0, qy, x0] + f * right[0, qy, x0 + 1]))
-                            colour += abs(np.float64(left[1, qy, qx])
-                                          - (g * right[1, qy, x0] + f * right[1, qy, x0 + 1]))
-                            colour += abs(np.float64(left[2, qy, qx])
-                                          - (g * right[2, qy, x0] + f * right[2, qy, x0 + 1]))
-                        else:
-                            colour = 0.0
-                            for ch in range(channels):
-                                colour += abs(np.float64(left[ch, qy, qx]) - (
-                                    g * right[ch, qy, x0] + f * right[ch, qy, x0 + 1]))
-                        colour = _capped(colour / channels, colour_cap)
-                        shown_grad = g * grad_r[qy, x0] + f * grad_r[qy, x0 + 1]
-                        gradient = _capped(abs(grad_l[qy, qx] - shown_grad), gradient_cap)
-                        costs_row[c, j] = weights_row[j] * ((1.0 - gradient_share) * colour
-                                                            + gradient_share * gradient)
-                for j in range(span):
-                    weights += weights_row[j]
-                    for c in range(count):
-                        totals[c] += costs_row[c, j]
-            if weights <= 0:
-                continue
-            best = own
-            best_cost = totals[0]
-            for c in range(1, count):
-                # A surface behind must explain the window better by the share margin.
-                if totals[c] * (1.0 + margin) < best_cost:
-                    best_cost = totals[c] * (1.0 + margin)
-                    best = candidates[c]
-            out[y, x] = best
+        _edge_sides_of_row(disp, left, right, grad_l, grad_r, skip, radius, colour_scale,
+                           distance_scale, gradient_share, colour_cap, gradient_cap, reach, jump,
+                           margin, classes, out, height, width, channels, by_colour, by_distance,
+                           np.int64(i))

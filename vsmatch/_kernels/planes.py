@@ -1,7 +1,7 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS, SERIAL_OPTIONS
+from . import KERNEL_OPTIONS, ROW_OPTIONS, SERIAL_OPTIONS
 
 #: Channels of the moments volume: weight, then weight times u, v, u^2, u v, v^2, d, u d, v d,
 #: d^2, and 1 (summed over a region: its pixel count).
@@ -54,6 +54,43 @@ def plane_moments(disp, weight, out):
             out[y, x, 9] = w * d * d
 
 
+@njit(**ROW_OPTIONS)
+def _plane_values_of_row(sums, min_weight, min_spread, out, spread, width, cx, cy, y):
+    """:func:`plane_values` of row ``y``."""
+    v0 = y - cy
+    m = np.empty((N_MOMENTS, width))
+    for x in range(width):
+        for k in range(N_MOMENTS):
+            m[k, x] = sums[y, x, k]
+    for x in range(width):
+        w = m[0, x]
+        # The threshold a float32 product, as the moments are float32.
+        fits = (w > 0) & (not (w < min_weight * np.float32(m[10, x])))
+        mu = m[1, x] / w
+        mv = m[2, x] / w
+        md = m[6, x] / w
+        suu = m[3, x] / w - mu * mu
+        suv = m[4, x] / w - mu * mv
+        svv = m[5, x] / w - mv * mv
+        sud = m[7, x] / w - mu * md
+        svd = m[8, x] / w - mv * md
+        det = suu * svv - suv * suv
+        wide_u = suu >= min_spread
+        wide_v = svv >= min_spread
+        both = wide_u & wide_v & (det > 1e-6 * suu * svv)
+        a_both = (sud * svv - svd * suv) / det
+        b_both = (svd * suu - sud * suv) / det
+        a_u = sud / suu
+        b_v = svd / svv
+        a = a_both if both else (a_u if wide_u else 0.0)
+        b = b_both if both else (0.0 if wide_u else (b_v if wide_v else 0.0))
+        value = np.float32(md + a * ((x - cx) - mu) + b * (v0 - mv))
+        rest = m[9, x] / w - md * md - a * sud - b * svd
+        rest = rest if rest > 0.0 else 0.0
+        out[y, x] = value if fits else np.float32(np.nan)
+        spread[y, x] = np.float32(np.sqrt(rest)) if fits else np.float32(np.nan)
+
+
 @njit(**KERNEL_OPTIONS)
 def plane_values(sums, min_weight, min_spread, out, spread):
     """The least-squares plane d = a u + b v + c through each pixel's support region
@@ -68,38 +105,8 @@ def plane_values(sums, min_weight, min_spread, out, spread):
     cx = (width - 1) / 2.0
     cy = (height - 1) / 2.0
     for y in prange(height):
-        v0 = y - cy
-        m = np.empty((N_MOMENTS, width))
-        for x in range(width):
-            for k in range(N_MOMENTS):
-                m[k, x] = sums[y, x, k]
-        for x in range(width):
-            w = m[0, x]
-            # The threshold a float32 product, as the moments are float32.
-            fits = (w > 0) & (not (w < min_weight * np.float32(m[10, x])))
-            mu = m[1, x] / w
-            mv = m[2, x] / w
-            md = m[6, x] / w
-            suu = m[3, x] / w - mu * mu
-            suv = m[4, x] / w - mu * mv
-            svv = m[5, x] / w - mv * mv
-            sud = m[7, x] / w - mu * md
-            svd = m[8, x] / w - mv * md
-            det = suu * svv - suv * suv
-            wide_u = suu >= min_spread
-            wide_v = svv >= min_spread
-            both = wide_u & wide_v & (det > 1e-6 * suu * svv)
-            a_both = (sud * svv - svd * suv) / det
-            b_both = (svd * suu - sud * suv) / det
-            a_u = sud / suu
-            b_v = svd / svv
-            a = a_both if both else (a_u if wide_u else 0.0)
-            b = b_both if both else (0.0 if wide_u else (b_v if wide_v else 0.0))
-            value = np.float32(md + a * ((x - cx) - mu) + b * (v0 - mv))
-            rest = m[9, x] / w - md * md - a * sud - b * svd
-            rest = rest if rest > 0.0 else 0.0
-            out[y, x] = value if fits else np.float32(np.nan)
-            spread[y, x] = np.float32(np.sqrt(rest)) if fits else np.float32(np.nan)
+        _plane_values_of_row(sums, min_weight, min_spread, out, spread, width, cx, cy,
+                             np.int64(y))
 
 
 @njit(inline="always")
@@ -120,6 +127,33 @@ def _reach(values, jump, out):
         out[i] = i - start
 
 
+@njit(**ROW_OPTIONS)
+def _cut_row_arms(arms, disp, jump, y):
+    """:func:`cut_arms_at_jumps`' left and right arms of row ``y``."""
+    width = disp.shape[1]
+    reach = np.empty(width, np.int64)
+    _reach(disp[y], jump, reach)
+    for x in range(width):
+        arms[0, y, x] = min(np.int64(arms[0, y, x]), reach[x])
+    _reach(disp[y, ::-1], jump, reach)
+    for x in range(width):
+        arms[1, y, x] = min(np.int64(arms[1, y, x]), reach[width - 1 - x])
+
+
+@njit(**ROW_OPTIONS)
+def _cut_column_arms(arms, disp, jump, x):
+    """:func:`cut_arms_at_jumps`' up and down arms of column ``x``."""
+    height = disp.shape[0]
+    column = disp[:, x].copy()
+    reach = np.empty(height, np.int64)
+    _reach(column, jump, reach)
+    for y in range(height):
+        arms[2, y, x] = min(np.int64(arms[2, y, x]), reach[y])
+    _reach(column[::-1], jump, reach)
+    for y in range(height):
+        arms[3, y, x] = min(np.int64(arms[3, y, x]), reach[height - 1 - y])
+
+
 @njit(**KERNEL_OPTIONS)
 def cut_arms_at_jumps(arms, disp, jump):
     """Shorten each arm (left, right, up, down) to end before the first step of more than
@@ -129,22 +163,9 @@ def cut_arms_at_jumps(arms, disp, jump):
     each way per row and per column."""
     height, width = disp.shape
     for y in prange(height):
-        reach = np.empty(width, np.int64)
-        _reach(disp[y], jump, reach)
-        for x in range(width):
-            arms[0, y, x] = min(np.int64(arms[0, y, x]), reach[x])
-        _reach(disp[y, ::-1], jump, reach)
-        for x in range(width):
-            arms[1, y, x] = min(np.int64(arms[1, y, x]), reach[width - 1 - x])
+        _cut_row_arms(arms, disp, jump, np.int64(y))
     for x in prange(width):
-        column = disp[:, x].copy()
-        reach = np.empty(height, np.int64)
-        _reach(column, jump, reach)
-        for y in range(height):
-            arms[2, y, x] = min(np.int64(arms[2, y, x]), reach[y])
-        _reach(column[::-1], jump, reach)
-        for y in range(height):
-            arms[3, y, x] = min(np.int64(arms[3, y, x]), reach[height - 1 - y])
+        _cut_column_arms(arms, disp, jump, np.int64(x))
 
 
 @njit(inline="always")

@@ -1,7 +1,7 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS
+from . import KERNEL_OPTIONS, ROW_OPTIONS
 from .arms import DOWN, LEFT, RIGHT, UP
 from .disparity import VALID
 from .rows import BLOCK_ROWS, dealt
@@ -21,6 +21,41 @@ def vote_runs(disp, labels, votes, run_end):
             run_end[y, x] = run_end[y, x + 1] if votes[y, x] == votes[y, x + 1] else x + 1
 
 
+@njit(**ROW_OPTIONS)
+def _region_vote_of_row(disp, labels, votes, run_end, arms, n_disp, min_votes, min_share,
+                        classes, out_disp, out_labels, height, width, n_blocks, block):
+    """:func:`region_vote` of the rows of block ``block`` (the ``dealt`` one)."""
+    top = dealt(block, n_blocks, classes) * BLOCK_ROWS
+    hist = np.zeros(n_disp, dtype=np.int32)
+    for y in range(top, min(height, top + BLOCK_ROWS)):
+        for x in range(width):
+            out_disp[y, x] = disp[y, x]
+            out_labels[y, x] = labels[y, x]
+            if labels[y, x] == VALID:
+                continue
+            hist[:] = 0
+            total = 0
+            for yy in range(y - np.int64(arms[UP, y, x]), y + np.int64(arms[DOWN, y, x]) + 1):
+                xx = x - np.int64(arms[LEFT, yy, x])
+                stop = x + np.int64(arms[RIGHT, yy, x]) + 1
+                while xx < stop:
+                    end = min(np.int64(run_end[yy, xx]), stop)
+                    vote = votes[yy, xx]
+                    if vote >= 0:
+                        hist[vote] += end - xx
+                        total += end - xx
+                    xx = end
+            if total <= min_votes:
+                continue
+            best = 0
+            for d in range(1, n_disp):
+                if hist[d] > hist[best]:
+                    best = d
+            if hist[best] > min_share * total:
+                out_disp[y, x] = best
+                out_labels[y, x] = VALID
+
+
 @njit(**KERNEL_OPTIONS)
 def region_vote(disp, labels, votes, run_end, arms, n_disp, min_votes, min_share, classes,
                 out_disp, out_labels):
@@ -36,35 +71,35 @@ def region_vote(disp, labels, votes, run_end, arms, n_disp, min_votes, min_share
     # Blocks of rows dealt out: only rejected pixels vote, and they gather (occlusions).
     n_blocks = (height + BLOCK_ROWS - 1) // BLOCK_ROWS
     for block in prange(n_blocks):
-        top = dealt(block, n_blocks, classes) * BLOCK_ROWS
-        hist = np.zeros(n_disp, dtype=np.int32)
-        for y in range(top, min(height, top + BLOCK_ROWS)):
-            for x in range(width):
-                out_disp[y, x] = disp[y, x]
-                out_labels[y, x] = labels[y, x]
-                if labels[y, x] == VALID:
-                    continue
-                hist[:] = 0
-                total = 0
-                for yy in range(y - np.int64(arms[UP, y, x]), y + np.int64(arms[DOWN, y, x]) + 1):
-                    xx = x - np.int64(arms[LEFT, yy, x])
-                    stop = x + np.int64(arms[RIGHT, yy, x]) + 1
-                    while xx < stop:
-                        end = min(np.int64(run_end[yy, xx]), stop)
-                        vote = votes[yy, xx]
-                        if vote >= 0:
-                            hist[vote] += end - xx
-                            total += end - xx
-                        xx = end
-                if total <= min_votes:
-                    continue
-                best = 0
-                for d in range(1, n_disp):
-                    if hist[d] > hist[best]:
-                        best = d
-                if hist[best] > min_share * total:
-                    out_disp[y, x] = best
-                    out_labels[y, x] = VALID
+        _region_vote_of_row(disp, labels, votes, run_end, arms, n_disp, min_votes, min_share,
+                            classes, out_disp, out_labels, height, width, n_blocks,
+                            np.int64(block))
+
+
+@njit(**ROW_OPTIONS)
+def _adjust_row(disp, volume, lo, count, jump, out, width, y):
+    """:func:`discontinuity_adjust` of row ``y``."""
+    for x in range(width):
+        d = disp[y, x]
+        out[y, x] = d
+        if not np.isfinite(d):
+            continue
+        base = np.int64(lo[y, x])
+        n = np.int64(count[y, x])
+        k = np.int64(d) - base
+        if k < 0 or k >= n:
+            continue
+        best_cost = volume[y, x, k]
+        for nx in (x - 1, x + 1):
+            if nx < 0 or nx >= width:
+                continue
+            nd = disp[y, nx]
+            kn = np.int64(nd) - base if np.isfinite(nd) else np.int64(-1)
+            if np.isfinite(nd) and abs(nd - d) > jump and 0 <= kn < n:
+                c = volume[y, x, kn]
+                if c < best_cost:
+                    best_cost = c
+                    out[y, x] = nd
 
 
 @njit(**KERNEL_OPTIONS)
@@ -74,27 +109,7 @@ def discontinuity_adjust(disp, volume, lo, count, jump, out):
     disparities in the pixel's band ``lo .. lo + count - 1``, the volume's candidates)."""
     height, width = disp.shape
     for y in prange(height):
-        for x in range(width):
-            d = disp[y, x]
-            out[y, x] = d
-            if not np.isfinite(d):
-                continue
-            base = np.int64(lo[y, x])
-            n = np.int64(count[y, x])
-            k = np.int64(d) - base
-            if k < 0 or k >= n:
-                continue
-            best_cost = volume[y, x, k]
-            for nx in (x - 1, x + 1):
-                if nx < 0 or nx >= width:
-                    continue
-                nd = disp[y, nx]
-                kn = np.int64(nd) - base if np.isfinite(nd) else np.int64(-1)
-                if np.isfinite(nd) and abs(nd - d) > jump and 0 <= kn < n:
-                    c = volume[y, x, kn]
-                    if c < best_cost:
-                        best_cost = c
-                        out[y, x] = nd
+        _adjust_row(disp, volume, lo, count, jump, out, width, np.int64(y))
 
 
 #: Sub-pixel fits: none, a parabola, or the equiangular (symmetric V) fit, which suits
@@ -123,6 +138,22 @@ def subpixel_offset(c0, c1, c2, fit):
     return 0.0
 
 
+@njit(**ROW_OPTIONS)
+def _subpixel_row(disp, volume, lo, count, fit, out, width, y):
+    """:func:`subpixel_fit` of row ``y``."""
+    for x in range(width):
+        d = disp[y, x]
+        out[y, x] = d
+        if not np.isfinite(d):
+            continue
+        base = np.int64(lo[y, x])
+        k = np.int64(d) - base
+        if k <= 0 or k >= np.int64(count[y, x]) - 1:
+            continue
+        out[y, x] = base + k + subpixel_offset(volume[y, x, k - 1], volume[y, x, k],
+                                        volume[y, x, k + 1], fit)
+
+
 @njit(**KERNEL_OPTIONS)
 def subpixel_fit(disp, volume, lo, count, fit, out):
     """``disp`` moved to the minimum of the fit (:func:`subpixel_offset`) through the costs
@@ -130,14 +161,4 @@ def subpixel_fit(disp, volume, lo, count, fit, out):
     band (``lo``, ``count``: the volume's candidates)."""
     height, width, _ = volume.shape
     for y in prange(height):
-        for x in range(width):
-            d = disp[y, x]
-            out[y, x] = d
-            if not np.isfinite(d):
-                continue
-            base = np.int64(lo[y, x])
-            k = np.int64(d) - base
-            if k <= 0 or k >= np.int64(count[y, x]) - 1:
-                continue
-            out[y, x] = base + k + subpixel_offset(volume[y, x, k - 1], volume[y, x, k],
-                                            volume[y, x, k + 1], fit)
+        _subpixel_row(disp, volume, lo, count, fit, out, width, np.int64(y))

@@ -1,7 +1,7 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS
+from . import KERNEL_OPTIONS, ROW_OPTIONS
 from .lanes import LANES, path_step_chunks_add, path_step_chunks_write, path_step_lanes
 
 
@@ -169,48 +169,144 @@ _walk_whole_add = _walk_steps(False, False)
 _walk_band_add = _walk_steps(True, False)
 
 
+def _row_walks(banded):
+    """Both walks along row ``y``, for bands or for the whole range: a kernel's loop body."""
+
+    @njit(**ROW_OPTIONS)
+    def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, y, out):
+        width, depth = cost.shape[1], cost.shape[2]
+        # Two path-cost rows, used in turn as previous and current.
+        paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
+        tmp = np.empty(depth + 2, dtype=np.float32)
+        prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
+        if banded:
+            out[y] = np.float32(0.0)
+        for direction in (1, -1):
+            start = 0 if direction == 1 else width - 1
+            prev_n = np.int64(-1)
+            for step in range(width):
+                x = start + direction * step
+                if banded and count[y, x] <= 0:  # no band: the path restarts after it
+                    prev_n = np.int64(-1)
+                    continue
+                now = step % 2
+                # The edge crossed from the previous pixel: stored at the later of the two.
+                ex = x if direction == 1 else x + 1
+                # The whole range's first walk writes every cell (no zeroing beforehand),
+                # the second adds; bands add to their zeroed row: a writing step for bands
+                # took 7 s of compiling for a row of 8 floats.
+                if direction == 1 and not banded:
+                    prev_lo, prev_n, m = _walk_whole_write(
+                        cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y,
+                        x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], tmp)
+                elif banded:
+                    prev_lo, prev_n, m = _walk_band_add(
+                        cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y,
+                        x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], tmp)
+                else:
+                    prev_lo, prev_n, m = _walk_whole_add(
+                        cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y,
+                        x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], tmp)
+
+    return walks
+
+
+def _column_walks(banded):
+    """Both walks down columns ``x0 .. x0 + n - 1`` side by side: a kernel's loop body."""
+
+    @njit(**ROW_OPTIONS)
+    def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, x0, n, out):
+        height, depth = cost.shape[0], cost.shape[2]
+        prev = np.full((n, depth + 2), np.inf, dtype=np.float32)
+        cur = np.full((n, depth + 2), np.inf, dtype=np.float32)
+        tmp = np.empty(depth + 2, dtype=np.float32)
+        prev_lo = np.zeros(n, dtype=np.int64)
+        prev_n = np.empty(n, dtype=np.int64)
+        mins = np.zeros(n, dtype=np.float32)
+        for direction in (1, -1):
+            prev_n[:] = -1
+            for step in range(height):
+                y = step if direction == 1 else height - 1 - step
+                ey = y if direction == 1 else y + 1  # the edge crossed, at the later row
+                for k in range(n):
+                    x = x0 + k
+                    if banded and count[y, x] <= 0:  # no band: the path restarts
+                        prev_n[k] = -1
+                        continue
+                    if banded:
+                        prev_lo[k], prev_n[k], mins[k] = _walk_band_add(
+                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                            y, x, ey, x, prev_lo[k], prev_n[k], mins[k], prev[k], cur[k], tmp)
+                    else:
+                        prev_lo[k], prev_n[k], mins[k] = _walk_whole_add(
+                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                            y, x, ey, x, prev_lo[k], prev_n[k], mins[k], prev[k], cur[k], tmp)
+                prev, cur = cur, prev
+
+    return walks
+
+
+def _diagonal_walks(banded):
+    """Both walks along diagonal ``line`` (see :func:`scanline_diagonal_pass`): a kernel's
+    loop body."""
+
+    @njit(**ROW_OPTIONS)
+    def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, step_x, weight, line, out):
+        height, width, depth = cost.shape
+        # Line starts on the top row, then down the first column (last for step_x = -1).
+        if line < width:
+            y0, x0 = 0, line if step_x == 1 else width - 1 - line
+        else:
+            y0, x0 = line - width + 1, 0 if step_x == 1 else width - 1
+        room_x = width - 1 - x0 if step_x == 1 else x0
+        length = min(height - y0, room_x + 1)
+        paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
+        tmp = np.empty(depth + 2, dtype=np.float32)
+        prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
+        for direction in (1, -1):
+            start = 0 if direction == 1 else length - 1
+            prev_n = np.int64(-1)
+            for step in range(length):
+                i = start + direction * step
+                y = y0 + i
+                x = x0 + i * step_x
+                if banded and count[y, x] <= 0:  # no band: the path restarts after it
+                    prev_n = np.int64(-1)
+                    continue
+                now = step % 2
+                # The edge crossed is stored at the later pixel of the two, top to bottom.
+                ey = y if direction == 1 else y + 1
+                ex = x if direction == 1 else x + step_x
+                if banded:
+                    prev_lo, prev_n, m = _walk_band_add(
+                        cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y,
+                        x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], tmp)
+                else:
+                    prev_lo, prev_n, m = _walk_whole_add(
+                        cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y,
+                        x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], tmp)
+
+    return walks
+
+
+# Module globals, as the steps: a kernel's closure holds only its ``banded`` flag.
+_whole_row_walks, _band_row_walks = _row_walks(False), _row_walks(True)
+_whole_column_walks, _band_column_walks = _column_walks(False), _column_walks(True)
+_whole_diagonal_walks, _band_diagonal_walks = _diagonal_walks(False), _diagonal_walks(True)
+
+
 def _row_kernel(banded):
     """:func:`scanline_rows`' kernel for bands or for the whole range."""
 
     @njit(**KERNEL_OPTIONS)
     def rows(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, out):
-        height, width, depth = cost.shape
-        for y in prange(height):
-            # Two path-cost rows, used in turn as previous and current.
-            paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
-            tmp = np.empty(depth + 2, dtype=np.float32)
-            prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
+        for y in prange(cost.shape[0]):
             if banded:
-                out[y] = np.float32(0.0)
-            for direction in (1, -1):
-                start = 0 if direction == 1 else width - 1
-                prev_n = np.int64(-1)
-                for step in range(width):
-                    x = start + direction * step
-                    if banded and count[y, x] <= 0:  # no band: the path restarts after it
-                        prev_n = np.int64(-1)
-                        continue
-                    now = step % 2
-                    # The edge crossed from the previous pixel: stored at the later of the two.
-                    ex = x if direction == 1 else x + 1
-                    # The whole range's first walk writes every cell (no zeroing
-                    # beforehand), the second adds; bands add to their zeroed row: a
-                    # writing step for bands took 7 s of compiling for a row of 8 floats.
-                    if direction == 1 and not banded:
-                        prev_lo, prev_n, m = _walk_whole_write(
-                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s,
-                            weight, y, x, y, ex, prev_lo, prev_n, m, paths[1 - now],
-                            paths[now], tmp)
-                    elif banded:
-                        prev_lo, prev_n, m = _walk_band_add(
-                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                            y, x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
-                            tmp)
-                    else:
-                        prev_lo, prev_n, m = _walk_whole_add(
-                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                            y, x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
-                            tmp)
+                _band_row_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                                np.int64(y), out)
+            else:
+                _whole_row_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                                 np.int64(y), out)
 
     return rows
 
@@ -220,38 +316,17 @@ def _column_kernel(banded):
 
     @njit(**KERNEL_OPTIONS)
     def columns(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, chunk, out):
-        height, width, depth = cost.shape
+        width = cost.shape[1]
         n_chunks = (width + chunk - 1) // chunk
         for c in prange(n_chunks):
             x0 = c * chunk
             n = min(width, x0 + chunk) - x0
-            prev = np.full((n, depth + 2), np.inf, dtype=np.float32)
-            cur = np.full((n, depth + 2), np.inf, dtype=np.float32)
-            tmp = np.empty(depth + 2, dtype=np.float32)
-            prev_lo = np.zeros(n, dtype=np.int64)
-            prev_n = np.empty(n, dtype=np.int64)
-            mins = np.zeros(n, dtype=np.float32)
-            for direction in (1, -1):
-                prev_n[:] = -1
-                for step in range(height):
-                    y = step if direction == 1 else height - 1 - step
-                    ey = y if direction == 1 else y + 1  # the edge crossed, at the later row
-                    for k in range(n):
-                        x = x0 + k
-                        if banded and count[y, x] <= 0:  # no band: the path restarts
-                            prev_n[k] = -1
-                            continue
-                        if banded:
-                            prev_lo[k], prev_n[k], mins[k] = _walk_band_add(
-                                cost, out, lo, count, change_l, change_r_rev, p1s, p2s,
-                                weight, y, x, ey, x, prev_lo[k], prev_n[k], mins[k],
-                                prev[k], cur[k], tmp)
-                        else:
-                            prev_lo[k], prev_n[k], mins[k] = _walk_whole_add(
-                                cost, out, lo, count, change_l, change_r_rev, p1s, p2s,
-                                weight, y, x, ey, x, prev_lo[k], prev_n[k], mins[k],
-                                prev[k], cur[k], tmp)
-                    prev, cur = cur, prev
+            if banded:
+                _band_column_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight,
+                                   x0, n, out)
+            else:
+                _whole_column_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s,
+                                    weight, x0, n, out)
 
     return columns
 
@@ -261,44 +336,15 @@ def _diagonal_kernel(banded):
 
     @njit(**KERNEL_OPTIONS)
     def diagonal(cost, lo, count, change_l, change_r_rev, p1s, p2s, step_x, weight, out):
-        height, width, depth = cost.shape
-        n_lines = height + width - 1
+        n_lines = cost.shape[0] + cost.shape[1] - 1
         for index in prange(n_lines):
             line = np.int64(index)  # prange's index may be unsigned: keep the sums signed
-            # Line starts on the top row, then down the first column (last for step_x = -1).
-            if line < width:
-                y0, x0 = 0, line if step_x == 1 else width - 1 - line
+            if banded:
+                _band_diagonal_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s,
+                                     step_x, weight, line, out)
             else:
-                y0, x0 = line - width + 1, 0 if step_x == 1 else width - 1
-            room_x = width - 1 - x0 if step_x == 1 else x0
-            length = min(height - y0, room_x + 1)
-            paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
-            tmp = np.empty(depth + 2, dtype=np.float32)
-            prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
-            for direction in (1, -1):
-                start = 0 if direction == 1 else length - 1
-                prev_n = np.int64(-1)
-                for step in range(length):
-                    i = start + direction * step
-                    y = y0 + i
-                    x = x0 + i * step_x
-                    if banded and count[y, x] <= 0:  # no band: the path restarts after it
-                        prev_n = np.int64(-1)
-                        continue
-                    now = step % 2
-                    # The edge crossed is stored at the later pixel of the two, top to bottom.
-                    ey = y if direction == 1 else y + 1
-                    ex = x if direction == 1 else x + step_x
-                    if banded:
-                        prev_lo, prev_n, m = _walk_band_add(
-                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                            y, x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
-                            tmp)
-                    else:
-                        prev_lo, prev_n, m = _walk_whole_add(
-                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                            y, x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now],
-                            tmp)
+                _whole_diagonal_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s,
+                                      step_x, weight, line, out)
 
     return diagonal
 
