@@ -20,6 +20,26 @@ SERIAL_OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 ROW_OPTIONS = dict(nogil=True, error_model="numpy")
 
 
+def _without_overlap():
+    """A Numba compiler that takes a function's array arguments not to overlap (LLVM's
+    ``noalias``), as Numba takes a parallel loop's: the loops then vectorise without
+    run-time overlap checks."""
+    from numba.core.compiler import Compiler
+
+    class WithoutOverlap(Compiler):
+        def __init__(self, typingctx, targetctx, library, args, return_type, flags, locals):
+            flags = flags.copy()
+            flags.noalias = True
+            super().__init__(typingctx, targetctx, library, args, return_type, flags, locals)
+
+    return WithoutOverlap
+
+
+#: :data:`ROW_OPTIONS` for a body whose output array overlaps none of its inputs (the
+#: caller's promise).
+ROW_APART_OPTIONS = dict(ROW_OPTIONS, pipeline_class=_without_overlap())
+
+
 def cache_is_cold() -> bool:
     """True when no compiled kernel is cached yet for this Python, so the first run
     compiles them all (about 35 s on 2 cores). Numba itself says where it caches: beside the

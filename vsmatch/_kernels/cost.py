@@ -1,8 +1,47 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS
+from . import KERNEL_OPTIONS, ROW_APART_OPTIONS
 from .census import popcount64
+
+
+@njit(**ROW_APART_OPTIONS)
+def _colour_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, colour_r_rev,
+                         census_table, grad_table, ad_table, max_cost, lo, count, y, out):
+    """:func:`matching_cost_volume` of row ``y`` with the three channels' term. Its output
+    overlaps no input, and the compiler is told so: the loop over the candidates then
+    vectorises without overlap checks (the 13 standard pairs' volumes with `default`: 0.61
+    -> 0.45 s at one thread, 0.31 -> 0.23 s at two). `fast`'s terms (no colour term) came
+    out slower so (0.04 -> 0.05 s; bands of 8 to 31 candidates): they stay in the loop."""
+    width, n_disp = out.shape[1], out.shape[2]
+    use_grad = grad_table.shape[0] > 0
+    for x in range(width):
+        cl = census_l[y, x]
+        gl = grad_l[y, x]
+        base = np.int64(lo[y, x])
+        if count[y, x] <= 0:  # no candidates (a held pixel): nothing to compute
+            continue
+        # As in the kernel: candidates k with a right pixel, read forward from the band's
+        # first candidate in the reversed right view.
+        last = max(min(np.int64(count[y, x]), x + 1 - base), 0)
+        start = width - 1 - x + base
+        census_r = census_r_rev[y, start:]
+        grad_r = grad_r_rev[y, start:]
+        costs = out[y, x]
+        c0 = colour_l[0, y, x]
+        c1 = colour_l[1, y, x]
+        c2 = colour_l[2, y, x]
+        r0 = colour_r_rev[0, y, start:]
+        r1 = colour_r_rev[1, y, start:]
+        r2 = colour_r_rev[2, y, start:]
+        for d in range(last):
+            c = census_table[popcount64(cl ^ census_r[d])]
+            if use_grad:
+                c += grad_table[abs(gl - grad_r[d])]
+            c += ad_table[abs(c0 - r0[d]) + abs(c1 - r1[d]) + abs(c2 - r2[d])]
+            costs[d] = c
+        for d in range(last, n_disp):
+            costs[d] = max_cost
 
 
 @njit(**KERNEL_OPTIONS)
@@ -24,6 +63,11 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
     use_ad = ad_table.shape[0] > 0
     channels = colour_l.shape[0]
     for y in prange(height):
+        if use_ad and channels == 3:  # `default`'s terms: a function of its own, below
+            _colour_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l,
+                                 colour_r_rev, census_table, grad_table, ad_table, max_cost,
+                                 lo, count, np.int64(y), out)
+            continue
         for x in range(width):
             cl = census_l[y, x]
             gl = grad_l[y, x]
@@ -38,22 +82,6 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
             census_r = census_r_rev[y, start:]
             grad_r = grad_r_rev[y, start:]
             costs = out[y, x]
-            if use_ad and channels == 3:
-                c0 = colour_l[0, y, x]
-                c1 = colour_l[1, y, x]
-                c2 = colour_l[2, y, x]
-                r0 = colour_r_rev[0, y, start:]
-                r1 = colour_r_rev[1, y, start:]
-                r2 = colour_r_rev[2, y, start:]
-                for d in range(last):
-                    c = census_table[popcount64(cl ^ census_r[d])]
-                    if use_grad:
-                        c += grad_table[abs(gl - grad_r[d])]
-                    c += ad_table[abs(c0 - r0[d]) + abs(c1 - r1[d]) + abs(c2 - r2[d])]
-                    costs[d] = c
-                for d in range(last, n_disp):
-                    costs[d] = max_cost
-                continue
             for d in range(last):
                 c = census_table[popcount64(cl ^ census_r[d])]
                 if use_grad:
