@@ -5,6 +5,17 @@ from . import KERNEL_OPTIONS, ROW_APART_OPTIONS
 from .census import popcount64
 
 
+@njit(inline="always")
+def _candidates(lo, count, y, x, width):
+    """Pixel (y, x)'s first candidate, how many of its candidates have a right pixel
+    (x - (base + k) >= 0), and its right pixels' place in the reversed right view: right
+    pixel x - d is at W - 1 - x + d, read forward from the band's first candidate (indexes
+    Numba knows are >= 0)."""
+    base = np.int64(lo[y, x])
+    last = max(min(np.int64(count[y, x]), x + 1 - base), 0)
+    return base, last, width - 1 - x + base
+
+
 @njit(**ROW_APART_OPTIONS)
 def _colour_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, colour_r_rev,
                          census_table, grad_table, ad_table, max_cost, lo, count, y, out):
@@ -16,15 +27,11 @@ def _colour_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
     width, n_disp = out.shape[1], out.shape[2]
     use_grad = grad_table.shape[0] > 0
     for x in range(width):
-        cl = census_l[y, x]
-        gl = grad_l[y, x]
-        base = np.int64(lo[y, x])
         if count[y, x] <= 0:  # no candidates (a held pixel): nothing to compute
             continue
-        # As in the kernel: candidates k with a right pixel, read forward from the band's
-        # first candidate in the reversed right view.
-        last = max(min(np.int64(count[y, x]), x + 1 - base), 0)
-        start = width - 1 - x + base
+        base, last, start = _candidates(lo, count, y, x, width)
+        cl = census_l[y, x]
+        gl = grad_l[y, x]
         census_r = census_r_rev[y, start:]
         grad_r = grad_r_rev[y, start:]
         costs = out[y, x]
@@ -69,16 +76,11 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
                                  lo, count, np.int64(y), out)
             continue
         for x in range(width):
-            cl = census_l[y, x]
-            gl = grad_l[y, x]
-            base = np.int64(lo[y, x])
             if count[y, x] <= 0:  # no candidates (a held pixel): nothing to compute
                 continue
-            # Candidates k with a right pixel: x - (base + k) >= 0.
-            last = max(min(np.int64(count[y, x]), x + 1 - base), 0)
-            # The right view comes reversed along x: right pixel x - d is at W - 1 - x + d,
-            # forward from the band's first candidate (Numba knows these indexes are >= 0).
-            start = width - 1 - x + base
+            base, last, start = _candidates(lo, count, y, x, width)
+            cl = census_l[y, x]
+            gl = grad_l[y, x]
             census_r = census_r_rev[y, start:]
             grad_r = grad_r_rev[y, start:]
             costs = out[y, x]
