@@ -51,7 +51,8 @@ def kernel_dispatchers() -> dict:
                 # A loop body compiled with its kernel (``ROW_OPTIONS``) is not cached on
                 # its own: not a kernel to compile ahead.
                 if isinstance(dispatcher, CPUDispatcher) and dispatcher.__module__ == \
-                        module.__name__ and not isinstance(dispatcher._cache, NullCache):
+                        module.__name__ and not isinstance(getattr(dispatcher, "_cache", None),
+                                                       NullCache):
                     name = f"{info.name}.{attr}" + ("" if key is None else f"[{key!r}]")
                     found[name] = dispatcher
     return found

@@ -15,8 +15,8 @@ SERIAL_OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 #: Numba's parallel passes then see a one-line loop and the body compiles once, as serial
 #: code, which cut the compiling of `default`'s kernels by a sixth. Not cached on its own:
 #: it is compiled into the kernel that calls it. Left inline where the code came out slower
-#: (the cost volume, the lanes' scanlines): a parallel loop's arrays are taken not to
-#: overlap, a function's may.
+#: (the cost volume's loop without the colour term, the lanes' scanlines, the bands' walks of
+#: the row and column scanlines).
 ROW_OPTIONS = dict(nogil=True, error_model="numpy")
 
 

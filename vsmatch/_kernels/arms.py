@@ -23,8 +23,9 @@ def colour_distance(image, y0, x0, y1, x1):
 
 
 @njit(**ROW_OPTIONS)
-def _colour_change_of_row(image, threshold, along_rows, out, width, y):
+def _colour_change_of_row(image, threshold, along_rows, out, y):
     """:func:`colour_change` of row ``y``."""
+    width = out.shape[1]
     for x in range(width):
         if (x == 0) if along_rows else (y == 0):
             out[y, x] = 1
@@ -37,9 +38,9 @@ def _colour_change_of_row(image, threshold, along_rows, out, width, y):
 def colour_change(image, threshold, along_rows, out):
     """out[y, x] = 1 where the colour distance between (y, x) and its predecessor along the
     axis is ``threshold`` or more, and where there is none."""
-    height, width = out.shape
+    height = out.shape[0]
     for y in prange(height):
-        _colour_change_of_row(image, threshold, along_rows, out, width, np.int64(y))
+        _colour_change_of_row(image, threshold, along_rows, out, np.int64(y))
 
 
 @njit(inline="always")

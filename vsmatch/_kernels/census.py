@@ -5,8 +5,9 @@ from . import KERNEL_OPTIONS, ROW_OPTIONS
 
 
 @njit(**ROW_OPTIONS)
-def _census_of_row(padded, half_w, half_h, band, out, width, y):
+def _census_of_row(padded, half_w, half_h, band, out, y):
     """:func:`census_transform` of row ``y``."""
+    width = out.shape[1]
     bits = np.zeros(width, dtype=np.uint64)
     centre = np.empty(width, dtype=np.float32)
     centre_row = padded[y + half_h, half_w:half_w + width]
@@ -32,9 +33,9 @@ def census_transform(padded, half_w, half_h, band, out):
     border pixels on each side. Each row is built one window offset at a time, so that the
     loop over x (shift, compare, or) vectorises.
     """
-    height, width = out.shape
+    height = out.shape[0]
     for y in prange(height):
-        _census_of_row(padded, half_w, half_h, band, out, width, np.int64(y))
+        _census_of_row(padded, half_w, half_h, band, out, np.int64(y))
 
 
 @njit(inline="always")

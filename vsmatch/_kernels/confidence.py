@@ -52,8 +52,9 @@ def cost_curve(volume, lo, count, disp, exclude, out_best, out_second, out_mean)
 
 
 @njit(**ROW_OPTIONS)
-def _logistic_of_row(features, weights, out, n, width, y):
+def _logistic_of_row(features, weights, out, y):
     """:func:`logistic` of row ``y``."""
+    n, width = features.shape[0], features.shape[2]
     # A row at a time, each term a pass along it: the passes vectorise (7x faster
     # than a pixel's terms at a time, the same sums in the same order).
     score = np.zeros(width, np.float32)
@@ -76,9 +77,9 @@ def logistic(features, weights, out):
     """out = 1 / (1 + exp(-clip(score, -30, 30))), the score the quadratic form
     sum_i f_i sum_(j >= i) weights[i, j] f_j of each pixel's features (the first a
     constant 1: that row holds the bias and the linear weights), in float32."""
-    n, height, width = features.shape
+    height = features.shape[1]
     for y in prange(height):
-        _logistic_of_row(features, weights, out, n, width, np.int64(y))
+        _logistic_of_row(features, weights, out, np.int64(y))
 
 
 @njit(**KERNEL_OPTIONS)
@@ -96,8 +97,9 @@ def rival_offsets(volume, disp, best, second, mean, hump, level, floor, reach, o
 
 @njit(**ROW_OPTIONS)
 def _curves_and_rivals_of_row(volume, disp, exclude, hump, level, floor, reach, out_best,
-                              out_second, out_mean, out_offset, width, depth, y):
+                              out_second, out_mean, out_offset, y):
     """:func:`cost_curve_and_rivals` of row ``y``."""
+    width, depth = volume.shape[1], volume.shape[2]
     for x in range(width):  # the row's curves, then its rivals (the row still in cache)
         inside = min(depth, x + 1)
         d1 = np.int64(disp[y, x])
@@ -119,10 +121,10 @@ def cost_curve_and_rivals(volume, disp, exclude, hump, level, floor, reach, out_
                           out_second, out_mean, out_offset):
     """:func:`cost_curve` over the whole range (no bands) and :func:`rival_offset` in
     one pass: the curve is walked for a rival while it is in cache."""
-    height, width, depth = volume.shape
+    height = volume.shape[0]
     for y in prange(height):
         _curves_and_rivals_of_row(volume, disp, exclude, hump, level, floor, reach, out_best,
-                                  out_second, out_mean, out_offset, width, depth, np.int64(y))
+                                  out_second, out_mean, out_offset, np.int64(y))
 
 
 @njit(inline="always")

@@ -77,8 +77,9 @@ def region_vote(disp, labels, votes, run_end, arms, n_disp, min_votes, min_share
 
 
 @njit(**ROW_OPTIONS)
-def _adjust_row(disp, volume, lo, count, jump, out, width, y):
+def _adjust_row(disp, volume, lo, count, jump, out, y):
     """:func:`discontinuity_adjust` of row ``y``."""
+    width = disp.shape[1]
     for x in range(width):
         d = disp[y, x]
         out[y, x] = d
@@ -107,9 +108,9 @@ def discontinuity_adjust(disp, volume, lo, count, jump, out):
     """On pixels where the disparity jumps by more than ``jump`` to a horizontal neighbour,
     take the neighbour's disparity if its matching cost at this pixel is lower (both
     disparities in the pixel's band ``lo .. lo + count - 1``, the volume's candidates)."""
-    height, width = disp.shape
+    height = disp.shape[0]
     for y in prange(height):
-        _adjust_row(disp, volume, lo, count, jump, out, width, np.int64(y))
+        _adjust_row(disp, volume, lo, count, jump, out, np.int64(y))
 
 
 #: Sub-pixel fits: none, a parabola, or the equiangular (symmetric V) fit, which suits
@@ -139,8 +140,9 @@ def subpixel_offset(c0, c1, c2, fit):
 
 
 @njit(**ROW_OPTIONS)
-def _subpixel_row(disp, volume, lo, count, fit, out, width, y):
+def _subpixel_row(disp, volume, lo, count, fit, out, y):
     """:func:`subpixel_fit` of row ``y``."""
+    width = disp.shape[1]
     for x in range(width):
         d = disp[y, x]
         out[y, x] = d
@@ -151,7 +153,7 @@ def _subpixel_row(disp, volume, lo, count, fit, out, width, y):
         if k <= 0 or k >= np.int64(count[y, x]) - 1:
             continue
         out[y, x] = base + k + subpixel_offset(volume[y, x, k - 1], volume[y, x, k],
-                                        volume[y, x, k + 1], fit)
+                                               volume[y, x, k + 1], fit)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -159,6 +161,6 @@ def subpixel_fit(disp, volume, lo, count, fit, out):
     """``disp`` moved to the minimum of the fit (:func:`subpixel_offset`) through the costs
     at d - 1, d, d + 1 of each pixel's integer disparity d, where all three are in its
     band (``lo``, ``count``: the volume's candidates)."""
-    height, width, _ = volume.shape
+    height = volume.shape[0]
     for y in prange(height):
-        _subpixel_row(disp, volume, lo, count, fit, out, width, np.int64(y))
+        _subpixel_row(disp, volume, lo, count, fit, out, np.int64(y))
