@@ -7,7 +7,7 @@ whether its disparity is right by the dataset's measure (bad 1.0 on middlebury2 
 and their products (vsmatch.confidence.term_names) is fitted on every pixel with ground
 truth, occluded ones too, each dataset weighing the same and each scene the same within it
 (r is measured on the non-occluded pixels); the shipped confidence is that model times the
-matchability gate (vsmatch.confidence.matchability), which pairs with nothing to match
+matchability gate (in vsmatch.confidence.combine), which pairs with nothing to match
 (flat grey, unrelated noise, two different scenes) are measured against. Printed per
 dataset: Hu and Mordohai's r (0 = a perfect ordering, about 1 = chance) of the fitted model,
 of the model fitted without that dataset (held out), of the left-right label alone, of the

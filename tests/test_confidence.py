@@ -280,16 +280,48 @@ def _pixel_features_by_numpy(disparity, labels, left, curve):
     valid = np.ones(shape, bool) if labels is None else labels == VALID
     row["valid"][:] = valid
     row["mismatched"][:] = False if labels is None else labels == MISMATCHED
-    confidence.log1p_into(confidence._distance_to(valid), row["fill_distance"])
+    confidence.log1p_into(_opencv_distance_to(valid), row["fill_distance"])
     confidence.log1p_into(texture(grey_levels(left)), row["texture"])
     finite = np.where(np.isfinite(disparity), disparity, 0).astype(np.float32)
     jumps = np.zeros(shape, bool)
     jumps[:, 1:] |= np.abs(np.diff(finite, axis=1)) > 1
     jumps[1:, :] |= np.abs(np.diff(finite, axis=0)) > 1
-    confidence.log1p_into(confidence._distance_to(jumps), row["jump_distance"])
+    confidence.log1p_into(_opencv_distance_to(jumps), row["jump_distance"])
     inside = np.arange(shape[1], dtype=np.float32)[None, :] - finite
     confidence.log1p_into(np.clip(inside, 0, confidence.MAX_DISTANCE), row["view_edge"])
     return out
+
+
+def _opencv_distance_to(mask):
+    """OpenCV's 3 x 3 chamfer distance to the nearest True pixel, at most MAX_DISTANCE."""
+    if not mask.any():
+        return np.full(mask.shape, confidence.MAX_DISTANCE, np.float32)
+    distance = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 3)
+    return np.minimum(distance, confidence.MAX_DISTANCE).astype(np.float32)
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 40), (37, 1), (5, 9), (120, 77), (333, 64)])
+@pytest.mark.parametrize("share", [0.0, 0.002, 0.05, 0.6])
+def test_chamfer_distances_are_opencvs_in_any_bands(shape, share):
+    """The distance features' chamfer distances, worked out in bands of rows on every
+    core: OpenCV's distanceTransform (DIST_L2, mask 3) to within float32 rounding (the sums
+    along a path may round in another order), and the same bytes whatever the bands."""
+    from vsmatch._kernels.confidence import chamfer_distances
+
+    rng = np.random.default_rng(int(share * 1000) + shape[0])
+    targets = rng.random((2,) + shape) < share
+    targets[1, shape[0] // 2, shape[1] // 2] = True  # one lone target
+    cap = np.float32(confidence.MAX_DISTANCE)
+    whole = np.empty(targets.shape, np.float32)
+    chamfer_distances(targets, cap, shape[0], 0, whole)  # one band: the plain two passes
+    for k in range(2):
+        np.testing.assert_allclose(whole[k], _opencv_distance_to(targets[k]), rtol=0,
+                                   atol=2e-6 * confidence.MAX_DISTANCE)
+    for band_rows in (1, 3, 17, 40):
+        banded = np.empty(targets.shape, np.float32)
+        chamfer_distances(targets, cap, band_rows, 18, banded)
+        assert banded.tobytes() == whole.tobytes(), band_rows
+    assert confidence.distances_to(targets).tobytes() == whole.tobytes()
 
 
 @pytest.mark.parametrize("with_labels", [True, False])
@@ -307,4 +339,31 @@ def test_pixel_features_kernel_equals_the_numpy_steps(with_labels):
     left = (rng.random(shape + (3,)) * 255).astype(np.uint8)
     expected = _pixel_features_by_numpy(disparity, labels, left, curve)
     got = confidence.pixel_features(disparity, labels, left, curve)
-    assert got.tobytes() == expected.tobytes()
+    # The distances are the same chamfer distances as OpenCV's, summed in another order.
+    distances = [confidence.FEATURES.index(name) for name in ("fill_distance", "jump_distance")]
+    others = [k for k in range(len(confidence.FEATURES)) if k not in distances]
+    assert got[others].tobytes() == expected[others].tobytes()
+    np.testing.assert_allclose(got[distances], expected[distances], rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (6, 50), (64, 33), (120, 160)])
+def test_flat_blobs_are_opencvs_dilate_and_erode(shape):
+    """The blob cap, a parallel kernel, caps what cv2.dilate and cv2.erode of the
+    disparity (invalid pixels left out) find: squares of one value without texture."""
+    rng = np.random.default_rng(shape[0])
+    disparity = np.round(rng.random(shape) * 3).astype(np.float32)
+    disparity[: shape[0] // 2, : shape[1] // 2] = 7.0  # a flat patch...
+    disparity[rng.random(shape) < 0.05] = np.inf  # ... with holes
+    disparity[-5:, -5:] = np.nan
+    texture = (rng.random(shape) * 4).astype(np.float32)
+    conf = rng.random(shape).astype(np.float32)
+    got = conf.copy()
+    confidence.cap_flat_blobs(got, disparity, texture)
+    finite = np.isfinite(disparity)
+    kernel = np.ones((confidence.BLOB_WINDOW,) * 2, np.uint8)
+    high = cv2.dilate(np.where(finite, disparity, -1e9).astype(np.float32), kernel)
+    low = cv2.erode(np.where(finite, disparity, 1e9).astype(np.float32), kernel)
+    blob = (high - low <= confidence.BLOB_SPREAD) & (texture < confidence.BLOB_TEXTURE)
+    expected = np.where(blob, np.minimum(conf, confidence.RANGE_END_CONFIDENCE), conf)
+    assert got.tobytes() == expected.astype(np.float32).tobytes()
+    assert (got < conf).any() or shape[0] < 64  # the patch is a blob where it is tall

@@ -116,16 +116,14 @@ def test_grey_views_get_a_one_channel_map():
 
 @pytest.mark.parametrize("shape, box", [((31, 45, 7), 9), ((4, 6, 3), 9), ((1, 12, 2), 5),
                                         ((20, 17, 5), 8), ((3, 3, 2), 1)])
-def test_the_first_matchs_box_mean_is_opencvs_blur(rng, shape, box):
-    """The quick first match averages its costs with a parallel kernel in place of
-    cv2.blur (which runs on one core): the same values, windows wider than the image and
-    even ones included."""
-    from vsmatch import exposure
-    from vsmatch._kernels.photometric import box_mean
+def test_the_box_blur_is_opencvs_blur(rng, shape, box):
+    """The quick first match (and the confidence's texture) average with a parallel kernel
+    in place of cv2.blur (which runs on one core): the same values, windows wider than the
+    image and even ones included."""
+    from vsmatch.images import box_blur
 
     volume = (rng.random(shape, dtype=np.float32) * 3).astype(np.float32)
-    out = np.empty_like(volume)
-    box_mean(volume, box, *(exposure.mirrored_lines(n, box) for n in shape[:2]), out)
+    out = box_blur(volume, box)
     assert out.tobytes() == cv2.blur(volume.copy(), (box, box)).tobytes()
 
 

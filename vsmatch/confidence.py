@@ -15,7 +15,7 @@ What the method already knows, per pixel (:func:`pixel_features`):
 
 A logistic model of the features and their products two by two (a margin counts for more
 where the check passed) combines them, gated by how clearly the neighbourhood matched at
-all (:func:`matchability`); its weights are fitted on the developers' data, all datasets
+all (the gate of :func:`combine`); its weights are fitted on the developers' data, all datasets
 together (``python scripts/fit_confidence.py`` re-fits them and writes
 ``vsmatch/confidence_weights.json``). The confidence never changes the disparity.
 
@@ -37,12 +37,13 @@ import cv2
 import numpy as np
 
 from ._kernels.rows import thread_classes
-from ._kernels.confidence import (cost_curve, cost_curve_and_rivals, logistic, pixel_terms,
-                                  repeats_at, rival_offsets)
+from ._kernels.confidence import (CHAMFER_STEP, cap_flat, chamfer_distances, cost_curve,
+                                  cost_curve_and_rivals, gated_logistic, pixel_terms, repeats_at,
+                                  rival_offsets)
 from .bands import Bands, of
 from .disparity import VALID, MISMATCHED
-from .images import grey_levels
-from .sensitivity import texture
+from .images import grey_levels, plane_blur
+from .sensitivity import TEXTURE_WINDOW
 from .tiles import row_blocks
 
 #: The features, in the order of the model's weights (a constant first).
@@ -159,22 +160,37 @@ def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
     out = np.empty((len(FEATURES),) + shape, np.float32)
     row = {name: out[k] for k, name in enumerate(FEATURES)}
     row["bias"].fill(1.0)
-    jumps = np.empty(shape, bool)
+    targets = np.empty((2,) + shape, np.bool_)  # valid pixels, disparity jumps
     # How far inside the right view the match lies (near its left edge, little of the
     # support region has a partner).
     inside = np.empty(shape, np.float32)
+    gradient = np.empty((1,) + shape, np.float32)
     no_labels = np.empty((0, 0), np.uint8)
     pixel_terms(*(np.ascontiguousarray(curve[name], dtype=np.float32)
                   for name in ("margin", "below_mean", "raw_margin", "support")),
                 no_labels if labels is None else np.ascontiguousarray(labels, np.uint8),
                 VALID, MISMATCHED, np.ascontiguousarray(disparity, dtype=np.float32),
-                np.float32(MAX_DISTANCE), row["margin"], row["margin_sq"], row["below_mean"],
-                row["raw_margin"], row["support"], row["valid"], row["mismatched"], jumps,
-                inside)
-    log1p_into(_distance_to(row["valid"] > 0), row["fill_distance"])
-    log1p_into(texture(grey_levels(left)), row["texture"])
-    log1p_into(_distance_to(jumps), row["jump_distance"])
+                np.ascontiguousarray(grey_levels(left)), np.float32(MAX_DISTANCE),
+                row["margin"], row["margin_sq"], row["below_mean"], row["raw_margin"],
+                row["support"], row["valid"], row["mismatched"], targets, inside, gradient)
+    fill, jump = distances_to(targets)
+    log1p_into(fill, row["fill_distance"])
+    log1p_into(plane_blur(gradient, TEXTURE_WINDOW)[0], row["texture"])
+    log1p_into(jump, row["jump_distance"])
     log1p_into(inside, row["view_edge"])
+    return out
+
+
+def distances_to(targets: np.ndarray) -> np.ndarray:
+    """For each (H, W) mask of ``targets`` (K, H, W), each pixel's distance (pixels, at
+    most MAX_DISTANCE; float32) to the nearest True one: OpenCV's 3 x 3 chamfer distance
+    (distanceTransform, DIST_L2, mask 3), worked out in bands of rows on every core."""
+    targets = np.ascontiguousarray(targets, dtype=np.bool_)
+    out = np.empty(targets.shape, np.float32)
+    # A path of MAX_DISTANCE spans at most MAX_DISTANCE / the shortest step rows.
+    halo = int(np.ceil(MAX_DISTANCE / CHAMFER_STEP)) + 1
+    band_rows = max(2 * halo, -(-targets.shape[1] // thread_classes()))
+    chamfer_distances(targets, np.float32(MAX_DISTANCE), band_rows, halo, out)
     return out
 
 
@@ -213,14 +229,6 @@ def log1p_into(values: np.ndarray, out: np.ndarray) -> None:
     log1p is not vectorised (its four calls took a third of the stage); within 3e-7 of
     log1p on the features' values (0 .. a few hundred)."""
     cv2.log(cv2.add(values, 1.0), dst=out)
-
-
-def _distance_to(mask: np.ndarray) -> np.ndarray:
-    """Distance (pixels, at most MAX_DISTANCE) from each pixel to the nearest True one."""
-    if not mask.any():
-        return np.full(mask.shape, MAX_DISTANCE, np.float32)
-    distance = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 3)
-    return np.minimum(distance, MAX_DISTANCE).astype(np.float32)
 
 
 def term_cells() -> list[tuple[int, int]]:
@@ -264,17 +272,27 @@ def combine(features: np.ndarray, disparity: np.ndarray,
             weights: np.ndarray | None = None) -> np.ndarray:
     """Confidence in [0, 1] (float32): the logistic model over ``features`` (``weights``:
     the matrix of its quadratic form, default :func:`model_weights`), times the
-    :func:`matchability` of the pixel's neighbourhood; 0 where the disparity is invalid
-    or points out of the right view (x - d < 0)."""
+    matchability gate of the pixel's neighbourhood; 0 where the disparity is invalid or
+    points out of the right view (x - d < 0).
+
+    The gate (0 .. 1) rises with the mean cost-curve margins over a :data:`GATE_WINDOW`
+    square, of the costs the winner was chosen on and of the aggregated costs before the
+    scanline optimisation: where no curve has a clear minimum (a blank wall, two unrelated
+    views) nothing was really matched, whatever the other features say. The scanline
+    penalties alone can sharpen a curve of unrelated views into a streak, which the
+    aggregated costs do not show. Real scenes never show such pairs, so the model cannot
+    learn them from the data."""
     weights = model_weights() if weights is None else weights
     # A kernel, not np.tensordot: BLAS's worker threads would keep spinning and slow the
     # next pair's Numba kernels by ~15 % on 2 cores (measured).
+    margins = plane_blur(np.stack([features[FEATURES.index("margin")],
+                                   features[FEATURES.index("raw_margin")]]), GATE_WINDOW)
+    ramps = np.array([GATE_FROM, GATE_TO - GATE_FROM, RAW_GATE_FROM,
+                      RAW_GATE_TO - RAW_GATE_FROM], np.float32)
     confidence = np.empty(features.shape[1:], np.float32)
-    logistic(np.ascontiguousarray(features, dtype=np.float32),
-             np.asarray(weights, dtype=np.float32), confidence)
-    confidence *= matchability(features[FEATURES.index("margin")],
-                               features[FEATURES.index("raw_margin")])
-    confidence[out_of_view(disparity)] = 0.0
+    gated_logistic(np.ascontiguousarray(features, dtype=np.float32),
+                   np.asarray(weights, dtype=np.float32), margins, ramps,
+                   np.ascontiguousarray(disparity, dtype=np.float32), confidence)
     return confidence
 
 
@@ -303,13 +321,12 @@ def cap_flat_blobs(confidence: np.ndarray, disparity: np.ndarray,
                    texture: np.ndarray) -> None:
     """Cap, in place, the confidence of blobs of one value in textureless areas at
     :data:`RANGE_END_CONFIDENCE` (below the cloud's threshold)."""
-    finite = np.isfinite(disparity)
-    kernel = np.ones((BLOB_WINDOW, BLOB_WINDOW), np.uint8)
-    # An invalid pixel counts as far from every value: no blob around it.
-    high = cv2.dilate(np.where(finite, disparity, -1e9).astype(np.float32), kernel)
-    low = cv2.erode(np.where(finite, disparity, 1e9).astype(np.float32), kernel)
-    blob = (high - low <= BLOB_SPREAD) & (texture < BLOB_TEXTURE)
-    _cap(confidence, blob, RANGE_END_CONFIDENCE)
+    # Invalid pixels are left out of a square's extent (one of nothing but invalid pixels
+    # counts as flat).
+    cap_flat(np.ascontiguousarray(disparity, dtype=np.float32),
+             np.ascontiguousarray(texture, dtype=np.float32), BLOB_WINDOW // 2,
+             np.float32(BLOB_SPREAD), np.float32(BLOB_TEXTURE),
+             np.float32(RANGE_END_CONFIDENCE), confidence)
 
 
 #: A pixel without texture (the texture feature below log(1 + NO_TEXTURE): under an eighth
@@ -332,30 +349,14 @@ def cap_repeated(confidence: np.ndarray, repeated: np.ndarray) -> None:
     """Cap, in place, the confidence where more than :data:`REPEAT_SHARE` of the
     :data:`REPEAT_WINDOW` square around a pixel is ``repeated`` (the curve feature of
     :func:`repeated_texture`) at :data:`RANGE_END_CONFIDENCE`."""
-    share = cv2.blur(repeated, (REPEAT_WINDOW, REPEAT_WINDOW))
+    share = plane_blur(np.ascontiguousarray(repeated, dtype=np.float32)[None],
+                       REPEAT_WINDOW)[0]
     _cap(confidence, share > REPEAT_SHARE, RANGE_END_CONFIDENCE)
 
 
 def _cap(confidence: np.ndarray, where: np.ndarray, value: float) -> None:
     """``confidence`` at most ``value`` where ``where`` holds, in place."""
     np.minimum(confidence, np.float32(value), out=confidence, where=where)
-
-
-def matchability(margin: np.ndarray, raw_margin: np.ndarray) -> np.ndarray:
-    """0 .. 1 from the mean cost-curve margins around each pixel (:data:`GATE_WINDOW`
-    square), of the costs the winner was chosen on and of the aggregated costs before
-    the scanline optimisation: where no curve has a clear minimum (a blank wall, two
-    unrelated views) nothing was really matched, whatever the other features say. The
-    scanline penalties alone can sharpen a curve of unrelated views into a streak, which
-    the aggregated costs do not show. Real scenes never show such pairs, so the model
-    cannot learn them from the data."""
-    gate = np.ones(margin.shape, np.float32)
-    for values, low, high in ((margin, GATE_FROM, GATE_TO),
-                              (raw_margin, RAW_GATE_FROM, RAW_GATE_TO)):
-        local = cv2.blur(np.clip(values, 0, 1).astype(np.float32),
-                         (GATE_WINDOW, GATE_WINDOW))
-        gate *= np.clip((local - low) / (high - low), 0, 1)
-    return gate
 
 
 def keep_confident(disparity: np.ndarray, confidence: np.ndarray,

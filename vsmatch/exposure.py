@@ -9,9 +9,8 @@ import dataclasses
 import numpy as np
 
 from . import disparity, photometric, pyramid
-from ._kernels.photometric import box_mean
 from .config import Config
-from .images import downsample
+from .images import box_blur, downsample
 from .level import matching_costs
 
 
@@ -38,18 +37,6 @@ def correct_exposure(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Co
     return photometric.apply(right, correction), correction, weight
 
 
-def mirrored_lines(length: int, box: int) -> np.ndarray:
-    """The line each of a ``box`` window's positions reads, for windows starting ``box //
-    2`` before each of ``length`` lines: OpenCV's mirror about the edge lines
-    (BORDER_REFLECT_101), again and again where the window is wider than the image."""
-    at = np.arange(length + box - 1) - box // 2
-    if length == 1:
-        return np.zeros_like(at)
-    period = 2 * (length - 1)
-    at = np.abs(at) % period
-    return np.where(at < length, at, period - at)
-
-
 def first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
                  ) -> tuple[np.ndarray, np.ndarray]:
     """A quick match for the photometric statistics: census and gradient costs (the colour
@@ -59,10 +46,7 @@ def first_match(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
     volume, _, _ = matching_costs(left, right, max_disp + 1,
                                    dataclasses.replace(cfg.cost, lambda_ad=None),
                                    direction=False)
-    averaged = np.empty_like(volume)
-    box = cfg.photometric.box
-    # cv2.blur's box mean, on every core.
-    box_mean(volume, box, *(mirrored_lines(n, box) for n in volume.shape[:2]), averaged)
+    averaged = box_blur(volume, cfg.photometric.box)
     disp_l, disp_r = disparity.winner_takes_all_both(averaged)
     labels = disparity.left_right_check(disp_l, disp_r, n_disp=max_disp + 1, tolerance=0)
     return disp_l, labels == disparity.VALID

@@ -6,6 +6,7 @@ import cv2
 import numpy as np
 
 from ._kernels.arms import colour_change as colour_change_kernel
+from ._kernels.photometric import box_mean, plane_box_mean
 
 
 def to_grey(image: np.ndarray) -> np.ndarray:
@@ -87,3 +88,30 @@ def upsample_nearest(array: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
         doubled = doubled.reshape(array.shape[:-2] + doubled.shape[-2:])
         return np.ascontiguousarray(doubled[..., :shape[0], :shape[1]])
     return array[..., rows[:, None], cols[None, :]]
+
+
+def box_blur(maps: np.ndarray, box: int) -> np.ndarray:
+    """The mean of each (H, W, K) map over ``box`` x ``box`` windows, the borders mirrored:
+    cv2.blur's values (the same bytes), on every core."""
+    out = np.empty_like(maps)
+    box_mean(maps, box, *(mirrored_lines(n, box) for n in maps.shape[:2]), out)
+    return out
+
+
+def plane_blur(planes: np.ndarray, box: int) -> np.ndarray:
+    """:func:`box_blur` of each (H, W) plane of ``planes`` (K, H, W)."""
+    out = np.empty_like(planes)
+    plane_box_mean(planes, box, *(mirrored_lines(n, box) for n in planes.shape[1:]), out)
+    return out
+
+
+def mirrored_lines(length: int, box: int) -> np.ndarray:
+    """The line each of a ``box`` window's positions reads, for windows starting ``box //
+    2`` before each of ``length`` lines: OpenCV's mirror about the edge lines
+    (BORDER_REFLECT_101), again and again where the window is wider than the image."""
+    at = np.arange(length + box - 1) - box // 2
+    if length == 1:
+        return np.zeros_like(at)
+    period = 2 * (length - 1)
+    at = np.abs(at) % period
+    return np.where(at < length, at, period - at)

@@ -1,7 +1,7 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS, ROW_OPTIONS, SERIAL_OPTIONS
+from . import KERNEL_OPTIONS, ROW_OPTIONS
 from .rows import dealt
 
 
@@ -80,6 +80,34 @@ def logistic(features, weights, out):
     height = features.shape[1]
     for y in prange(height):
         _logistic_of_row(features, weights, out, np.int64(y))
+
+
+@njit(**ROW_OPTIONS)
+def _gated_logistic_of_row(features, weights, margins, ramps, disparity, out, y):
+    """:func:`gated_logistic` of row ``y``."""
+    _logistic_of_row(features, weights, out, y)
+    first_from, first_span, second_from, second_span = ramps
+    for x in range(out.shape[1]):
+        # As the NumPy expressions did it: float32 throughout, the two ramps multiplied
+        # first.
+        first = _unit((margins[0, y, x] - first_from) / first_span)
+        second = _unit((margins[1, y, x] - second_from) / second_span)
+        value = out[y, x] * (first * second)
+        d = disparity[y, x]
+        if not np.isfinite(d) or np.float32(x) - d < np.float32(-0.5):
+            value = np.float32(0.0)  # no estimate, or its match left of the right view
+        out[y, x] = value
+
+
+@njit(**KERNEL_OPTIONS)
+def gated_logistic(features, weights, margins, ramps, disparity, out):
+    """:func:`logistic` of each pixel's features times the matchability gate: the product
+    of the ramps (m - from) / span clipped to 0 .. 1 of the two ``margins`` (2, H, W) with
+    ``ramps`` = (from, span, from, span), float32; 0 where ``disparity`` is not finite or
+    x - disparity < -0.5."""
+    for y in prange(features.shape[1]):
+        _gated_logistic_of_row(features, weights, margins, ramps, disparity, out,
+                               np.int64(y))
 
 
 @njit(**KERNEL_OPTIONS)
@@ -223,38 +251,191 @@ def _unit(value):
     return value
 
 
-@njit(**SERIAL_OPTIONS)
-def pixel_terms(margin, below_mean, raw_margin, support, labels, valid, mismatched, disparity,
-                max_distance, out_margin, out_margin_sq, out_below_mean, out_raw_margin,
-                out_support, out_valid, out_mismatched, jumps, inside):
-    """The features a pixel's own values give, in one pass (serial: a light pass, where
-    a parallel kernel took 2.4 s to compile against 0.7): the margins clipped to 0 .. 1
-    (and the first squared), the support copied, VALID and MISMATCHED from ``labels`` (an
-    empty array: every pixel valid), and for the distance features: ``jumps`` where the
-    disparity (0 where not finite) changes by more than 1 from the pixel left of or above
-    it, ``inside`` = x - that disparity clipped to 0 .. ``max_distance``. ``valid``,
-    ``mismatched``: the labels' values (``vsmatch.disparity``'s)."""
+@njit(**ROW_OPTIONS)
+def _pixel_terms_of_row(margin, below_mean, raw_margin, support, labels, valid, mismatched,
+                        disparity, grey, max_distance, out_margin, out_margin_sq,
+                        out_below_mean, out_raw_margin, out_support, out_valid,
+                        out_mismatched, targets, inside, gradient, y):
+    """:func:`pixel_terms` of row ``y``."""
     height, width = disparity.shape
     labelled = labels.shape[0] > 0
-    for y in range(height):
+    above, below = _mirrored(y - 1, height), _mirrored(y + 1, height)
+    for x in range(width):
+        m = _unit(margin[y, x])
+        out_margin[y, x] = m
+        out_margin_sq[y, x] = m * m
+        out_below_mean[y, x] = _unit(below_mean[y, x])
+        out_raw_margin[y, x] = _unit(raw_margin[y, x])
+        out_support[y, x] = support[y, x]
+        is_valid = not labelled or labels[y, x] == valid
+        out_valid[y, x] = 1.0 if is_valid else 0.0
+        out_mismatched[y, x] = 1.0 if labelled and labels[y, x] == mismatched else 0.0
+        targets[0, y, x] = is_valid
+        d = disparity[y, x]
+        here = d if np.isfinite(d) else np.float32(0.0)
+        step = False
+        if x > 0:
+            left = disparity[y, x - 1]
+            step = abs(here - (left if np.isfinite(left) else np.float32(0.0))) > 1
+        if y > 0:
+            up = disparity[y - 1, x]
+            step = step or abs(here - (up if np.isfinite(up) else np.float32(0.0))) > 1
+        targets[1, y, x] = step
+        room = np.float32(x) - here
+        inside[y, x] = min(max(room, np.float32(0.0)), max_distance)
+    # The 3 x 3 Sobel derivatives (borders mirrored as OpenCV's BORDER_REFLECT_101): whole
+    # numbers, so the same float32 values as cv2.Sobel's.
+    up, here, down = grey[above], grey[y], grey[below]
+    for x in range(1, width - 1):
+        gradient[0, y, x] = _sobel_sum(up, here, down, x - 1, x, x + 1)
+    for x in (0, width - 1):
+        gradient[0, y, x] = _sobel_sum(up, here, down, _mirrored(x - 1, width), x,
+                                       _mirrored(x + 1, width))
+
+
+@njit(inline="always")
+def _sobel_sum(up, here, down, west, x, east):
+    """|gx| + |gy| of the 3 x 3 Sobel derivatives at column ``x`` of the row ``here``."""
+    gx = ((np.float32(up[east]) + 2 * np.float32(here[east]) + np.float32(down[east]))
+          - (np.float32(up[west]) + 2 * np.float32(here[west]) + np.float32(down[west])))
+    gy = ((np.float32(down[west]) + 2 * np.float32(down[x]) + np.float32(down[east]))
+          - (np.float32(up[west]) + 2 * np.float32(up[x]) + np.float32(up[east])))
+    return abs(gx) + abs(gy)
+
+
+@njit(inline="always")
+def _mirrored(i, n):
+    """Index ``i`` mirrored into 0 .. n - 1 about the edge lines (BORDER_REFLECT_101),
+    for ``i`` at most one step outside."""
+    if n == 1:
+        return 0
+    if i < 0:
+        return -i
+    if i >= n:
+        return 2 * n - 2 - i
+    return i
+
+
+@njit(**KERNEL_OPTIONS)
+def pixel_terms(margin, below_mean, raw_margin, support, labels, valid, mismatched, disparity,
+                grey, max_distance, out_margin, out_margin_sq, out_below_mean, out_raw_margin,
+                out_support, out_valid, out_mismatched, targets, inside, gradient):
+    """The features a pixel's own values give, in one pass: the margins clipped to 0 .. 1
+    (and the first squared), the support copied, VALID and MISMATCHED from ``labels`` (an
+    empty array: every pixel valid), and for the neighbourhood features: ``targets[0]``
+    where the pixel is valid and ``targets[1]`` where the disparity (0 where not finite)
+    changes by more than 1 from the pixel left of or above it (what the distances are
+    measured to), ``inside`` = x - that disparity clipped to 0 .. ``max_distance``, and
+    ``gradient[0]`` = |gx| + |gy| of the 3 x 3 Sobel derivatives of ``grey``.
+    ``valid``, ``mismatched``: the labels' values (``vsmatch.disparity``'s)."""
+    for y in prange(disparity.shape[0]):
+        _pixel_terms_of_row(margin, below_mean, raw_margin, support, labels, valid,
+                            mismatched, disparity, grey, max_distance, out_margin,
+                            out_margin_sq, out_below_mean, out_raw_margin, out_support,
+                            out_valid, out_mismatched, targets, inside, gradient,
+                            np.int64(y))
+
+
+#: The 3 x 3 chamfer steps of OpenCV's DIST_L2 mask 3 (Borgefors): along a row or column,
+#: and diagonal.
+CHAMFER_STEP, CHAMFER_DIAGONAL = 0.955, 1.3693
+
+
+@njit(**ROW_OPTIONS)
+def _chamfer_band(targets, cap, band_rows, halo, job, out):
+    """:func:`chamfer_distances` of one band of rows of one map (``job`` = map x bands +
+    band): the two passes over the band and ``halo`` rows either side."""
+    count, height, width = targets.shape
+    bands = (height + band_rows - 1) // band_rows
+    k, band = job // bands, job % bands
+    first, stop = band * band_rows, min(height, (band + 1) * band_rows)
+    y0, y1 = max(0, first - halo), min(height, stop + halo)
+    rows = y1 - y0
+    step, diagonal = np.float32(CHAMFER_STEP), np.float32(CHAMFER_DIAGONAL)
+    far = np.float32(1e30)  # outside the image and not yet reached: no target
+    t = np.full((rows + 2, width + 2), far, np.float32)
+    for i in range(rows):  # forward: from the row above and the pixel to the left
+        line = targets[k, y0 + i]
         for x in range(width):
-            m = _unit(margin[y, x])
-            out_margin[y, x] = m
-            out_margin_sq[y, x] = m * m
-            out_below_mean[y, x] = _unit(below_mean[y, x])
-            out_raw_margin[y, x] = _unit(raw_margin[y, x])
-            out_support[y, x] = support[y, x]
-            out_valid[y, x] = 1.0 if not labelled or labels[y, x] == valid else 0.0
-            out_mismatched[y, x] = 1.0 if labelled and labels[y, x] == mismatched else 0.0
-            d = disparity[y, x]
-            here = d if np.isfinite(d) else np.float32(0.0)
-            step = False
-            if x > 0:
-                left = disparity[y, x - 1]
-                step = abs(here - (left if np.isfinite(left) else np.float32(0.0))) > 1
-            if y > 0:
-                up = disparity[y - 1, x]
-                step = step or abs(here - (up if np.isfinite(up) else np.float32(0.0))) > 1
-            jumps[y, x] = step
-            room = np.float32(x) - here
-            inside[y, x] = min(max(room, np.float32(0.0)), max_distance)
+            if line[x]:
+                t[i + 1, x + 1] = 0.0
+            else:
+                a = min(t[i, x] + diagonal, t[i, x + 1] + step)
+                a = min(a, t[i, x + 2] + diagonal)
+                t[i + 1, x + 1] = min(a, t[i + 1, x] + step)
+    for i in range(rows - 1, -1, -1):  # backward: from the row below and the pixel right
+        y = y0 + i
+        for x in range(width - 1, -1, -1):
+            a = t[i + 1, x + 1]
+            if a > step:
+                a = min(a, t[i + 2, x + 2] + diagonal)
+                a = min(a, t[i + 2, x + 1] + step)
+                a = min(a, t[i + 2, x] + diagonal)
+                a = min(a, t[i + 1, x + 2] + step)
+                t[i + 1, x + 1] = a
+            if y >= first and y < stop:
+                out[k, y, x] = min(a, cap)
+
+
+@njit(**KERNEL_OPTIONS)
+def chamfer_distances(targets, cap, band_rows, halo, out):
+    """``out[k]``: each pixel's 3 x 3 chamfer distance (float32, at most ``cap``) to the
+    nearest pixel where ``targets[k]`` holds, by the two passes of Borgefors' algorithm
+    (OpenCV's distanceTransform with DIST_L2 and mask 3). Bands of ``band_rows`` rows run
+    in parallel, each with ``halo`` rows either side: a path of length ``cap`` or less
+    spans fewer rows than that, so every band's distances up to ``cap`` are those of the
+    whole image, and the result does not depend on the bands."""
+    count, height = targets.shape[0], targets.shape[1]
+    bands = (height + band_rows - 1) // band_rows
+    for job in prange(count * bands):
+        _chamfer_band(targets, cap, band_rows, halo, np.int64(job), out)
+
+
+@njit(**ROW_OPTIONS)
+def _column_extent_of_row(disparity, radius, high, low, y):
+    """The largest and smallest disparity (not finite: left out) of each column over
+    rows ``y - radius .. y + radius`` (those the image has), into row ``y``."""
+    height, width = disparity.shape
+    far = np.float32(1e9)
+    for x in range(width):
+        high[y, x] = -far
+        low[y, x] = far
+    for yy in range(max(0, y - radius), min(height, y + radius + 1)):
+        line = disparity[yy]
+        for x in range(width):
+            d = line[x]
+            finite = np.isfinite(d)
+            high[y, x] = max(high[y, x], d if finite else -far)
+            low[y, x] = min(low[y, x], d if finite else far)
+
+
+@njit(**ROW_OPTIONS)
+def _flat_of_row(high, low, texture, radius, spread, flat_texture, cap, confidence, y):
+    """:func:`cap_flat` of row ``y``, from its columns' extents."""
+    width = high.shape[1]
+    for x in range(width):
+        if texture[y, x] >= flat_texture:
+            continue
+        top, bottom = high[y, x], low[y, x]
+        for xx in range(max(0, x - radius), min(width, x + radius + 1)):
+            top = max(top, high[y, xx])
+            bottom = min(bottom, low[y, xx])
+        if top - bottom <= spread:
+            confidence[y, x] = min(confidence[y, x], cap)
+
+
+@njit(**KERNEL_OPTIONS)
+def cap_flat(disparity, texture, radius, spread, flat_texture, cap, confidence):
+    """``confidence`` at most ``cap`` (in place) where every finite disparity of the
+    (2 radius + 1) square around a pixel lies within ``spread`` of the others and
+    ``texture`` is below ``flat_texture`` (float32 throughout; a square holding a pixel
+    that is not finite is never flat): the extents of cv2.dilate and cv2.erode, a
+    column's first, then along the row."""
+    high = np.empty(disparity.shape, np.float32)
+    low = np.empty(disparity.shape, np.float32)
+    for y in prange(disparity.shape[0]):
+        _column_extent_of_row(disparity, radius, high, low, np.int64(y))
+    for y in prange(disparity.shape[0]):
+        _flat_of_row(high, low, texture, radius, spread, flat_texture, cap, confidence,
+                     np.int64(y))
+

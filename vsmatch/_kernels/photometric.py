@@ -1,7 +1,7 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS, SERIAL_OPTIONS
+from . import KERNEL_OPTIONS, ROW_OPTIONS, SERIAL_OPTIONS
 
 
 @njit(**KERNEL_OPTIONS)
@@ -33,6 +33,49 @@ def box_mean(volume, box, rows_at, columns_at, out):
                     window[d] += enter[d] - leave[d]
             for d in range(depth):
                 out[y, x, d] = window[d] * scale
+
+
+#: Rows of a plane that :func:`plane_box_mean` slides one window sum down (a band's first
+#: row sums its window afresh): fixed, so the sums do not depend on the threads.
+BLUR_BAND_ROWS = 16
+
+
+@njit(**ROW_OPTIONS)
+def _plane_box_mean_of_band(planes, box, rows_at, columns_at, out, job):
+    """:func:`plane_box_mean` of one band of rows of one plane (``job`` = plane x bands +
+    band)."""
+    height, width = planes.shape[1], planes.shape[2]
+    bands = (height + BLUR_BAND_ROWS - 1) // BLUR_BAND_ROWS
+    k, band = job // bands, job % bands
+    first, stop = band * BLUR_BAND_ROWS, min(height, (band + 1) * BLUR_BAND_ROWS)
+    scale = 1.0 / (box * box)
+    columns = np.zeros(width)  # each column's sum over the window's rows
+    for i in range(box):
+        src = planes[k, rows_at[first + i]]
+        for x in range(width):
+            columns[x] += src[x]
+    for y in range(first, stop):
+        if y > first:
+            enter, leave = planes[k, rows_at[y + box - 1]], planes[k, rows_at[y - 1]]
+            for x in range(width):
+                columns[x] += np.float64(enter[x]) - np.float64(leave[x])
+        window = 0.0
+        for i in range(box):
+            window += columns[columns_at[i]]
+        for x in range(width):
+            if x > 0:
+                window += columns[columns_at[x + box - 1]] - columns[columns_at[x - 1]]
+            out[k, y, x] = window * scale
+
+
+@njit(**KERNEL_OPTIONS)
+def plane_box_mean(planes, box, rows_at, columns_at, out):
+    """:func:`box_mean` of each (H, W) plane of ``planes`` (K, H, W), in float64 sums that
+    slide down bands of :data:`BLUR_BAND_ROWS` rows and along each row (exact for sums of
+    whole numbers; on other float32 values within float64 rounding of cv2.blur's)."""
+    bands = (planes.shape[1] + BLUR_BAND_ROWS - 1) // BLUR_BAND_ROWS
+    for job in prange(planes.shape[0] * bands):
+        _plane_box_mean_of_band(planes, box, rows_at, columns_at, out, np.int64(job))
 
 
 @njit(**SERIAL_OPTIONS)
