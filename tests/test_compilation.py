@@ -96,7 +96,7 @@ def test_kernels_compiled_ahead_in_two_processes_load_from_the_cache(tmp_path):
     """Two small kernels compiled ahead, one here and one in a spawned process, into an
     empty cache: a later process loads both and compiles nothing."""
     record = compilation.kernels_for("default", bands=False)
-    wanted = {name: record[name] for name in ("noise.block_means", "photometric.map_colours")}
+    wanted = {name: record[name] for name in ("photometric.matched_colours", "photometric.map_colours")}
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
     first = ("import json, sys\nfrom vsmatch import compilation\n"
              "compilation.compile_kernels(json.loads(sys.argv[1]), workers=2)\n")
@@ -109,7 +109,7 @@ def test_kernels_compiled_ahead_in_two_processes_load_from_the_cache(tmp_path):
     env["NUMBA_CACHE_DIR"] = str(tmp_path / "empty")
     out = subprocess.run([sys.executable, "-c", _SECOND_PROCESS, json.dumps(wanted)],
                          env=env, check=True, capture_output=True, text=True).stdout
-    assert {"block_means", "map_colours"} <= set(json.loads(out.strip().splitlines()[-1]))
+    assert {"matched_colours", "map_colours"} <= set(json.loads(out.strip().splitlines()[-1]))
 
 
 def test_also_adds_another_configs_whole_range_match():

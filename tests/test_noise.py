@@ -153,8 +153,9 @@ def test_a_level_down_white_noise_shrinks_as_the_pyramid_factor_says():
 
 @pytest.mark.parametrize("shape", [(61, 83, 3), (40, 40), (9, 200, 3), (12, 7)])
 def test_the_block_means_kernel_gives_numpys_estimate(rng, shape):
-    """The noise estimate's block means come from a parallel kernel; on 8-bit views
-    (integer responses, exact sums) the estimate is NumPy's to the last bit."""
+    """The noise estimate's block means come from a parallel kernel that works out the
+    operator's responses as it sums them; on 8-bit views (integer responses, exact sums)
+    the estimate is NumPy's (OpenCV's filter, then block means) to the last bit."""
     import cv2
 
     from vsmatch import noise

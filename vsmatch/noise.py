@@ -15,9 +15,9 @@ import dataclasses
 import cv2
 import numpy as np
 
-from ._kernels.noise import block_means
+from ._kernels.noise import noise_block_means
 from .config import Config
-from .images import to_grey
+from .images import grey_levels, to_grey
 
 # Immerkaer's operator: the difference of two Laplacians, blind to planes and ramps.
 _NOISE_KERNEL = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
@@ -37,15 +37,14 @@ def estimate_noise(image: np.ndarray, *, block: int = 8, percentile: float = 2.0
     the noise and not the texture (clean Middlebury views read at most 3.3 this way, the
     same views with 2 % noise at least 3.5).
     """
-    grey = to_grey(image)
-    response = np.abs(cv2.filter2D(grey, -1, _NOISE_KERNEL))[1:-1, 1:-1]
-    height = response.shape[0] - response.shape[0] % block
-    width = response.shape[1] - response.shape[1] % block
-    if height == 0 or width == 0:
+    rows, columns = ((n - 2) // block for n in image.shape[:2])
+    if rows > 0 and columns > 0:
+        # The operator's responses summed block by block as they are worked out.
+        means = np.empty((rows, columns), np.float32)
+        noise_block_means(np.ascontiguousarray(grey_levels(image)), block, means)
+    else:  # smaller than a block: the mean response
+        response = np.abs(cv2.filter2D(to_grey(image), -1, _NOISE_KERNEL))[1:-1, 1:-1]
         means = np.array([response.mean()]) if response.size else np.zeros(1)
-    else:
-        means = np.empty((height // block, width // block), np.float32)
-        block_means(np.ascontiguousarray(response), block, means)
     return float(np.sqrt(np.pi / 2.0) * np.percentile(means, percentile) / 6.0
                  / _PERCENTILE_BIAS)
 
