@@ -96,7 +96,8 @@ def test_kernels_compiled_ahead_in_two_processes_load_from_the_cache(tmp_path):
     """Two small kernels compiled ahead, one here and one in a spawned process, into an
     empty cache: a later process loads both and compiles nothing."""
     record = compilation.kernels_for("default", bands=False)
-    wanted = {name: record[name] for name in ("photometric.matched_colours", "photometric.map_colours")}
+    wanted = {name: record[name]
+              for name in ("photometric.matched_colours", "photometric.map_colours")}
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
     first = ("import json, sys\nfrom vsmatch import compilation\n"
              "compilation.compile_kernels(json.loads(sys.argv[1]), workers=2)\n")
