@@ -392,34 +392,27 @@ def chamfer_distances(targets, cap, band_rows, halo, out):
 
 
 @njit(**ROW_OPTIONS)
-def _column_extent_of_row(disparity, radius, high, low, y):
-    """The largest and smallest disparity (not finite: left out) of each column over
-    rows ``y - radius .. y + radius`` (those the image has), into row ``y``."""
+def _cap_flat_of_row(disparity, texture, radius, spread, flat_texture, cap, confidence, y):
+    """:func:`cap_flat` of row ``y``: the largest and smallest disparity of each column
+    over rows ``y - radius .. y + radius`` (those the image has), then of the square."""
     height, width = disparity.shape
-    far = np.float32(1e9)
-    for x in range(width):
-        high[y, x] = -far
-        low[y, x] = far
+    far = np.float32(1e9)  # what stands for a disparity that is not finite
+    high = np.full(width, -far, np.float32)
+    low = np.full(width, far, np.float32)
     for yy in range(max(0, y - radius), min(height, y + radius + 1)):
         line = disparity[yy]
         for x in range(width):
             d = line[x]
             finite = np.isfinite(d)
-            high[y, x] = max(high[y, x], d if finite else -far)
-            low[y, x] = min(low[y, x], d if finite else far)
-
-
-@njit(**ROW_OPTIONS)
-def _flat_of_row(high, low, texture, radius, spread, flat_texture, cap, confidence, y):
-    """:func:`cap_flat` of row ``y``, from its columns' extents."""
-    width = high.shape[1]
+            high[x] = max(high[x], d if finite else -far)
+            low[x] = min(low[x], d if finite else far)
     for x in range(width):
         if texture[y, x] >= flat_texture:
             continue
-        top, bottom = high[y, x], low[y, x]
+        top, bottom = high[x], low[x]
         for xx in range(max(0, x - radius), min(width, x + radius + 1)):
-            top = max(top, high[y, xx])
-            bottom = min(bottom, low[y, xx])
+            top = max(top, high[xx])
+            bottom = min(bottom, low[xx])
         if top - bottom <= spread:
             confidence[y, x] = min(confidence[y, x], cap)
 
@@ -431,11 +424,6 @@ def cap_flat(disparity, texture, radius, spread, flat_texture, cap, confidence):
     ``texture`` is below ``flat_texture`` (float32 throughout; a square holding a pixel
     that is not finite is never flat): the extents of cv2.dilate and cv2.erode, a
     column's first, then along the row."""
-    high = np.empty(disparity.shape, np.float32)
-    low = np.empty(disparity.shape, np.float32)
     for y in prange(disparity.shape[0]):
-        _column_extent_of_row(disparity, radius, high, low, np.int64(y))
-    for y in prange(disparity.shape[0]):
-        _flat_of_row(high, low, texture, radius, spread, flat_texture, cap, confidence,
-                     np.int64(y))
-
+        _cap_flat_of_row(disparity, texture, radius, spread, flat_texture, cap, confidence,
+                         np.int64(y))
