@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 
@@ -55,38 +54,3 @@ class Bands:
 def of(volume: np.ndarray, bands: Bands | None) -> Bands:
     """``bands``, or the whole range of ``volume`` (H, W, D) when None."""
     return Bands.full(volume.shape[:2], volume.shape[2]) if bands is None else bands
-
-
-def extremes(disparity: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
-    """Smallest and largest finite disparity over each pixel's ``size`` x ``size``
-    neighbourhood (float32; inf and -inf where there is none): the span a band around an
-    earlier estimate starts from."""
-    finite = np.isfinite(disparity)
-    kernel = np.ones((size, size), np.uint8)
-    low = cv2.erode(np.where(finite, disparity, np.inf).astype(np.float32), kernel,
-                    borderType=cv2.BORDER_REPLICATE)
-    high = cv2.dilate(np.where(finite, disparity, -np.inf).astype(np.float32), kernel,
-                      borderType=cv2.BORDER_REPLICATE)
-    return low, high
-
-
-def held(low: np.ndarray, high: np.ndarray, n_disp: int) -> tuple[np.ndarray, np.ndarray]:
-    """The first candidate and the count of ``low .. high`` (float arrays, per pixel;
-    rounded outwards) within the range ``0 .. n_disp - 1`` (float arrays)."""
-    lo = np.clip(np.floor(low), 0, n_disp - 1)
-    return lo, np.clip(np.ceil(high), 0, n_disp - 1) - lo + 1
-
-
-def around(low: np.ndarray, high: np.ndarray, centre: np.ndarray, n_disp: int,
-           width: int) -> Bands:
-    """Bands holding ``low .. high`` (float arrays, per pixel; rounded outwards) within the
-    range ``0 .. n_disp - 1``; where that is more than ``width`` candidates, the ``width``
-    centred on ``centre``; none where ``low``, ``high`` or ``centre`` is not finite."""
-    known = np.isfinite(low) & np.isfinite(high) & np.isfinite(centre)
-    lo, count = held(np.where(known, low, 0), np.where(known, high, 0), n_disp)
-    wide = count > width
-    middle = np.round(np.where(known, centre, 0)) - width // 2
-    lo = np.where(wide, np.clip(middle, 0, max(n_disp - width, 0)), lo)
-    count = np.where(wide, min(width, n_disp), count)
-    count[~known] = 0
-    return Bands(lo.astype(np.int32), count.astype(np.int32), int(min(width, n_disp)), n_disp)

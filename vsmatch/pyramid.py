@@ -21,8 +21,8 @@ from . import bands
 from .bands import Bands
 from .config import BandsConfig
 from .disparity import VALID
-from ._kernels.bands import centre_on_likest
-from .images import to_grey, upsample_nearest
+from ._kernels.bands import bands_from_coarse as bands_from_coarse_kernel, centre_on_likest
+from .images import to_grey
 
 #: Disparities the level below must keep for ``pyramid.min_levels`` to go down to it.
 MIN_FORCED_DISPARITIES = 10
@@ -56,51 +56,40 @@ def level_down(width: int, max_disp: int) -> tuple[int, int]:
     return width, min(int(math.ceil(max_disp / 2)), width - 1)
 
 
-def coarse_extremes(coarse: np.ndarray, coarse_labels: np.ndarray | None
-                    ) -> tuple[np.ndarray, np.ndarray]:
-    """Smallest and largest valid coarse disparity of each pixel's 3 x 3 neighbourhood
-    (float32; inf and -inf where there is none).
-
-    Where the coarse level rejected the pixel (occluded or mismatched, then filled), its
-    own filled value only: the neighbours' disparities there are mostly the occluder's.
-    """
-    valid = np.isfinite(coarse)
-    low, high = bands.extremes(coarse, 3)
-    if coarse_labels is not None:
-        unsure = (coarse_labels != VALID) & valid
-        low[unsure] = coarse[unsure]
-        high[unsure] = coarse[unsure]
-    low[~valid], high[~valid] = np.inf, -np.inf
-    return low, high
-
-
 def bands_from_coarse(coarse: np.ndarray, coarse_labels: np.ndarray | None,
                       shape: tuple[int, int], max_disp: int, cfg: BandsConfig,
                       views: tuple[np.ndarray, np.ndarray] | None = None) -> Bands:
     """Each pixel's candidates at this level from the disparity one level down: twice the
-    smallest to twice the largest of its coarse 3 x 3 neighbourhood (:func:`coarse_extremes`),
+    smallest to twice the largest of its coarse 3 x 3 neighbourhood (a pixel the coarse
+    level rejected, then filled: its own value only, its neighbours' being mostly the
+    occluder's),
     widened by ``band`` and one more each side (the sub-pixel fit's neighbours), at most
     ``max_band`` of them around twice its own coarse disparity (with ``guide`` and the
     ``views``, this level's left view and the one below, around that of the coarse
     neighbour most like the pixel: :func:`_centre_on_likest`); none where the coarse
     level has no estimate."""
-    low, high = coarse_extremes(coarse, coarse_labels)
-    widen = cfg.band + 1
-    # Pixel by pixel of the coarse maps, then each coarse pixel's band repeated over its
-    # block: the same as on the maps repeated first, for a quarter of the work.
-    with np.errstate(invalid="ignore"):
-        small = bands.around(2 * low - widen, 2 * high + widen, 2 * coarse, max_disp + 1,
-                             cfg.max_band)
-    found = bands.Bands(upsample_nearest(small.lo, shape), upsample_nearest(small.count, shape),
-                        small.width, small.n_disp)
-    if cfg.guide is not None and views is not None:
-        _centre_on_likest(found, coarse, coarse_labels, low, high, widen, views, cfg.guide)
+    n_disp = max_disp + 1
+    lo, count = (np.empty(shape, np.int32) for _ in range(2))
+    wide = np.empty(coarse.shape, np.bool_)
+    # Each coarse pixel's band, repeated over its block of fine pixels as it is written.
+    bands_from_coarse_kernel(np.ascontiguousarray(coarse, dtype=np.float32),
+                             _no_labels() if coarse_labels is None
+                             else np.ascontiguousarray(coarse_labels, np.uint8),
+                             VALID, cfg.band + 1, n_disp, cfg.max_band, lo, count, wide)
+    found = bands.Bands(lo, count, min(cfg.max_band, n_disp), n_disp)
+    if cfg.guide is not None and views is not None and wide.any():
+        _centre_on_likest(found, coarse, coarse_labels, wide, views, cfg.guide)
     return found
 
 
+def _no_labels() -> np.ndarray:
+    """The kernels' stand-in for no labels: every pixel valid."""
+    return np.empty((0, 0), np.uint8)
+
+
 def _centre_on_likest(found: Bands, coarse: np.ndarray, coarse_labels: np.ndarray | None,
-                      low: np.ndarray, high: np.ndarray, widen: int,
-                      views: tuple[np.ndarray, np.ndarray], guide: float) -> None:
+                      wide: np.ndarray, views: tuple[np.ndarray, np.ndarray],
+                      guide: float) -> None:
     """Where a coarse pixel's 3 x 3 range is wider than a band, its fine pixels' bands (in
     ``found``, in place) centred on the coarse neighbour whose grey level is nearest each
     one's, the pixel's own unless another is nearer by more than ``guide``. At a depth
@@ -108,10 +97,6 @@ def _centre_on_likest(found: Bands, coarse: np.ndarray, coarse_labels: np.ndarra
     pixels beside a thin object could only take the object's disparity (``fast`` drew a
     synthetic wire 3 px wide 1.47x its width, 1.15x with this)."""
     n_disp = found.n_disp
-    # The range bands.around cut to the band's width (low, high: inf, -inf where none).
-    wide = bands.held(2 * low - widen, 2 * high + widen, n_disp)[1] > found.width
-    if not wide.any():
-        return
     usable = np.isfinite(coarse)
     if coarse_labels is not None:
         usable &= coarse_labels == VALID
