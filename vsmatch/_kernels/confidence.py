@@ -421,9 +421,9 @@ def _cap_flat_of_row(disparity, texture, radius, spread, flat_texture, cap, conf
 def cap_flat(disparity, texture, radius, spread, flat_texture, cap, confidence):
     """``confidence`` at most ``cap`` (in place) where every finite disparity of the
     (2 radius + 1) square around a pixel lies within ``spread`` of the others and
-    ``texture`` is below ``flat_texture`` (float32 throughout; a square holding a pixel
-    that is not finite is never flat): the extents of cv2.dilate and cv2.erode, a
-    column's first, then along the row."""
+    ``texture`` is below ``flat_texture`` (float32 throughout; pixels that are not finite
+    are left out of the extents, and a square of nothing but them counts as flat): the
+    extents of cv2.dilate and cv2.erode, a column's first, then along the row."""
     for y in prange(disparity.shape[0]):
         _cap_flat_of_row(disparity, texture, radius, spread, flat_texture, cap, confidence,
                          np.int64(y))
