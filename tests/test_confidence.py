@@ -8,7 +8,7 @@ from click.testing import CliRunner
 from plyfile import PlyData
 
 from vsmatch import confidence, datasets, evaluation, io, pipeline
-from vsmatch._kernels.confidence import logistic
+from vsmatch._kernels.confidence import gated_logistic
 from vsmatch.cli import main
 from vsmatch.config import config_from_dict, load_config
 
@@ -85,7 +85,10 @@ def test_the_model_is_the_quadratic_form_of_its_named_terms(rng):
     features = rng.uniform(0, 1, (n, 3, 5)).astype(np.float32)
     features[0] = 1.0  # the bias
     out = np.empty((3, 5), np.float32)
-    logistic(features, matrix, out)
+    # Margins of 1 open the gate; disparities of 0 are in view: the model alone.
+    ramps = np.array([0.12, 0.08, 0.003, 0.007], np.float32)
+    gated_logistic(features, matrix, np.ones((2, 3, 5), np.float32), ramps,
+                   np.zeros((3, 5), np.float32), out)
     index = {name: k for k, name in enumerate(confidence.FEATURES)}
     score = np.zeros((3, 5))
     for name, value in zip(names, values):

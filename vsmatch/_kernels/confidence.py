@@ -53,7 +53,9 @@ def cost_curve(volume, lo, count, disp, exclude, out_best, out_second, out_mean)
 
 @njit(**ROW_OPTIONS)
 def _logistic_of_row(features, weights, out, y):
-    """:func:`logistic` of row ``y``."""
+    """out = 1 / (1 + exp(-clip(score, -30, 30))) along row ``y``, the score the quadratic
+    form sum_i f_i sum_(j >= i) weights[i, j] f_j of each pixel's features (the first a
+    constant 1: that row holds the bias and the linear weights), in float32."""
     n, width = features.shape[0], features.shape[2]
     # A row at a time, each term a pass along it: the passes vectorise (7x faster
     # than a pixel's terms at a time, the same sums in the same order).
@@ -70,16 +72,6 @@ def _logistic_of_row(features, weights, out, y):
     for x in range(width):
         clipped = min(np.float32(30.0), max(np.float32(-30.0), score[x]))
         out[y, x] = np.float32(1.0) / (np.float32(1.0) + np.exp(-clipped))
-
-
-@njit(**KERNEL_OPTIONS)
-def logistic(features, weights, out):
-    """out = 1 / (1 + exp(-clip(score, -30, 30))), the score the quadratic form
-    sum_i f_i sum_(j >= i) weights[i, j] f_j of each pixel's features (the first a
-    constant 1: that row holds the bias and the linear weights), in float32."""
-    height = features.shape[1]
-    for y in prange(height):
-        _logistic_of_row(features, weights, out, np.int64(y))
 
 
 @njit(**ROW_OPTIONS)
@@ -101,7 +93,8 @@ def _gated_logistic_of_row(features, weights, margins, ramps, disparity, out, y)
 
 @njit(**KERNEL_OPTIONS)
 def gated_logistic(features, weights, margins, ramps, disparity, out):
-    """:func:`logistic` of each pixel's features times the matchability gate: the product
+    """The logistic model of each pixel's features (:func:`_logistic_of_row`) times the
+    matchability gate: the product
     of the ramps (m - from) / span clipped to 0 .. 1 of the two ``margins`` (2, H, W) with
     ``ramps`` = (from, span, from, span), float32; 0 where ``disparity`` is not finite or
     x - disparity < -0.5."""
