@@ -41,7 +41,7 @@ from ._kernels.confidence import (CHAMFER_STEP, cap_flat, chamfer_distances, cos
                                   cost_curve_and_rivals, gated_logistic, pixel_terms, repeats_at,
                                   rival_offsets)
 from .bands import Bands, of
-from .disparity import VALID, MISMATCHED
+from .disparity import MISMATCHED, VALID, labels_for_kernels
 from .images import grey_levels, plane_blur
 from .sensitivity import TEXTURE_WINDOW
 from .tiles import row_blocks
@@ -165,11 +165,10 @@ def pixel_features(disparity: np.ndarray, labels: np.ndarray | None, left: np.nd
     # support region has a partner).
     inside = np.empty(shape, np.float32)
     gradient = np.empty((1,) + shape, np.float32)
-    no_labels = np.empty((0, 0), np.uint8)
     pixel_terms(*(np.ascontiguousarray(curve[name], dtype=np.float32)
                   for name in ("margin", "below_mean", "raw_margin", "support")),
-                no_labels if labels is None else np.ascontiguousarray(labels, np.uint8),
-                VALID, MISMATCHED, np.ascontiguousarray(disparity, dtype=np.float32),
+                labels_for_kernels(labels), VALID, MISMATCHED,
+                np.ascontiguousarray(disparity, dtype=np.float32),
                 np.ascontiguousarray(grey_levels(left)), np.float32(MAX_DISTANCE),
                 row["margin"], row["margin_sq"], row["below_mean"], row["raw_margin"],
                 row["support"], row["valid"], row["mismatched"], targets, inside, gradient)

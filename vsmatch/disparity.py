@@ -19,6 +19,14 @@ VALID, OCCLUDED, MISMATCHED = _k.VALID, _k.OCCLUDED, _k.MISMATCHED
 NO_DISPARITY = _k.NO_DISPARITY
 
 
+def labels_for_kernels(labels: np.ndarray | None) -> np.ndarray:
+    """The check's ``labels`` as the kernels read them (uint8, C-contiguous); an empty
+    array where there are none, which the kernels take as every pixel valid."""
+    if labels is None:
+        return np.empty((0, 0), np.uint8)
+    return np.ascontiguousarray(labels, np.uint8)
+
+
 def winner_takes_all(volume: np.ndarray, bands: Bands | None = None) -> np.ndarray:
     """Left-view disparity ``argmin_d C(p, d)`` over each pixel's band (default: the whole
     range) as int32 (H, W); ties take the smaller d; ``NO_DISPARITY`` without a band."""

@@ -20,7 +20,7 @@ import numpy as np
 from . import bands
 from .bands import Bands
 from .config import BandsConfig
-from .disparity import VALID
+from .disparity import VALID, labels_for_kernels
 from ._kernels.bands import bands_from_coarse as bands_from_coarse_kernel, centre_on_likest
 from .images import to_grey
 
@@ -73,18 +73,12 @@ def bands_from_coarse(coarse: np.ndarray, coarse_labels: np.ndarray | None,
     wide = np.empty(coarse.shape, np.bool_)
     # Each coarse pixel's band, repeated over its block of fine pixels as it is written.
     bands_from_coarse_kernel(np.ascontiguousarray(coarse, dtype=np.float32),
-                             _no_labels() if coarse_labels is None
-                             else np.ascontiguousarray(coarse_labels, np.uint8),
-                             VALID, cfg.band + 1, n_disp, cfg.max_band, lo, count, wide)
+                             labels_for_kernels(coarse_labels), VALID, cfg.band + 1,
+                             n_disp, cfg.max_band, lo, count, wide)
     found = bands.Bands(lo, count, min(cfg.max_band, n_disp), n_disp)
     if cfg.guide is not None and views is not None and wide.any():
         _centre_on_likest(found, coarse, coarse_labels, wide, views, cfg.guide)
     return found
-
-
-def _no_labels() -> np.ndarray:
-    """The kernels' stand-in for no labels: every pixel valid."""
-    return np.empty((0, 0), np.uint8)
 
 
 def _centre_on_likest(found: Bands, coarse: np.ndarray, coarse_labels: np.ndarray | None,
