@@ -5,8 +5,8 @@ import pytest
 from numba import njit
 
 from vsmatch._kernels.disparity import _argmin
-from vsmatch._kernels.lanes import (LANES, add_in_lanes, argmin_chunks, copy_lanes,
-                                    divide_lanes, path_step_chunks_add,
+from vsmatch._kernels.lanes import (LANES, add_arm_in_lanes, add_in_lanes, argmin_chunks,
+                                    copy_lanes, divide_lanes, path_step_chunks_add,
                                     path_step_chunks_write, path_step_lanes)
 from vsmatch._kernels.scanline import path_step
 
@@ -17,47 +17,80 @@ def _add_vector(total, size, src, src_at, held, held_at, first, stop, reach, rea
 
 
 @njit(cache=False)
+def _add_arm_vector(total, size, src, held, first_pass, lo, count, reach, reach_at, base, n,
+                    pixel, stride, length):
+    add_arm_in_lanes(total, size, src, held, first_pass, lo, count, reach, reach_at, base, n,
+                     pixel, stride, length)
+
+
+@njit(cache=False)
+def _add_arm_each(total, size, src, held, first_pass, lo, count, reach, reach_at, base, n,
+                  pixel, stride, length):
+    """The arm a neighbour at a time, with :func:`add_in_lanes`, as the kernels took it."""
+    depth = src.shape[2]
+    ones = np.ones(LANES, np.float32)
+    for k in range(1, length + 1):
+        neighbour = pixel + k * stride
+        off = base - np.int64(lo.flat[neighbour])
+        if off <= -LANES or off >= LANES:
+            continue
+        first = max(np.int64(0), -off)
+        stop = min(n, np.int64(count.flat[neighbour]) - off)
+        at = neighbour * depth + off
+        if first_pass:
+            add_in_lanes(total, size, src, at, ones, 0, first, stop, reach, reach_at, k)
+        else:
+            add_in_lanes(total, size, src, at, held, at, first, stop, reach, reach_at, k)
+
+
+@njit(cache=False)
 def _copy_and_divide(dst, dst_at, src, src_at, numerator, denominator, quotient, at):
     copy_lanes(dst, dst_at, src, src_at)
     divide_lanes(quotient, at, numerator, denominator)
 
 
 @njit(cache=False)
-def _step_vector(cost, out, at, prev, cur, change, change_at, p1a, p1b, p2a, p2b, m, weight,
-                 n):
-    return path_step_lanes(cost, out, at, prev, cur, change, change_at, p1a, p1b, p2a, p2b, m,
-                           weight, n)
+def _step_vector(cost, out, at, paths, prev_at, cur_at, change, change_at, p1a, p1b, p2a, p2b,
+                 m, weight, n):
+    return path_step_lanes(cost, out, at, paths, prev_at, cur_at, change, change_at, p1a, p1b,
+                           p2a, p2b, m, weight, n)
 
 
 @njit(cache=False)
-def _step_scalar(cost, out, at, prev, cur, change, change_at, p1a, p1b, p2a, p2b, m, weight,
-                 n):
+def _step_scalar(cost, out, at, paths, prev_at, cur_at, change, change_at, p1a, p1b, p2a, p2b,
+                 m, weight, n):
+    least = np.float32(np.inf)
     for d in range(LANES):
         c = change[change_at + d]
-        v = cost[at + d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - m
+        v = cost[at + d] + path_step(paths, prev_at, d, p1b if c else p1a,
+                                     p2b if c else p2a) - m
         v = v if d < n else np.float32(np.inf)
-        cur[d + 1] = v
+        paths[cur_at + d + 1] = v
         out[at + d] += weight * v
-    return cur[1:LANES + 1].min()
+        least = min(least, v)
+    return least
 
 
 @njit(cache=False)
-def _chunks_vector(src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m, weight, chunks, write):
+def _chunks_vector(cost, out, at, paths, prev_at, cur_at, change, change_at, p1a, p1b, p2a,
+                   p2b, m, weight, chunks, write):
     if write:
-        return path_step_chunks_write(src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m,
-                                      weight, chunks)
-    return path_step_chunks_add(src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m, weight,
-                                chunks)
+        return path_step_chunks_write(cost, out, at, paths, prev_at, cur_at, change,
+                                      change_at, p1a, p1b, p2a, p2b, m, weight, chunks)
+    return path_step_chunks_add(cost, out, at, paths, prev_at, cur_at, change, change_at,
+                                p1a, p1b, p2a, p2b, m, weight, chunks)
 
 
 @njit(cache=False)
-def _chunks_scalar(src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m, weight, chunks, write):
+def _chunks_scalar(cost, out, at, paths, prev_at, cur_at, change, change_at, p1a, p1b, p2a,
+                   p2b, m, weight, chunks, write):
     least = np.float32(np.inf)
     for d in range(chunks * LANES):
-        c = change[d]
-        v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - m
-        cur[d + 1] = v
-        dst[d] = weight * v if write else dst[d] + weight * v
+        c = change[change_at + d]
+        v = cost[at + d] + path_step(paths, prev_at, d, p1b if c else p1a,
+                                     p2b if c else p2a) - m
+        paths[cur_at + d + 1] = v
+        out[at + d] = weight * v if write else out[at + d] + weight * v
         least = min(least, v)
     return least
 
@@ -96,14 +129,20 @@ def test_lanes_copy_and_divide_elementwise(rng):
 
 def test_a_path_step_in_lanes_is_the_scalar_step(rng):
     """Bands of every width, path costs with infinite lanes and finite ends (as a band
-    that moved leaves them), both penalties."""
+    that moved leaves them), both penalties; the previous and current path costs anywhere
+    in one array."""
     for _ in range(300):
         n = int(rng.integers(1, LANES + 1))
-        prev = (rng.random(LANES + 2) * 4).astype(np.float32)
-        prev[rng.random(LANES + 2) < 0.2] = np.inf
+        paths = (rng.random(40) * 4).astype(np.float32)
+        paths[rng.random(40) < 0.2] = np.inf
+        prev_at = int(rng.integers(0, 40 - LANES - 2))
+        cur_at = int(rng.integers(0, 40 - LANES - 2))
+        while abs(cur_at - prev_at) < LANES + 2:  # the two do not overlap
+            cur_at = int(rng.integers(0, 40 - LANES - 2))
         cost = (rng.random(30) * 3).astype(np.float32)
         change = (rng.random(30) < 0.5).astype(np.uint8)
         at, change_at = int(rng.integers(0, 22)), int(rng.integers(0, 22))
+        prev = paths[prev_at:prev_at + LANES + 2]
         finite = prev[np.isfinite(prev)]
         m = np.float32(finite.min() if finite.size else 0.0)
         p1a, p1b = np.float32(0.5), np.float32(0.25)
@@ -111,41 +150,73 @@ def test_a_path_step_in_lanes_is_the_scalar_step(rng):
         weight = np.float32(0.25)
         out_v = rng.random(30).astype(np.float32)
         out_s = out_v.copy()
-        cur_v = np.full(LANES + 2, -1, np.float32)
-        cur_s = cur_v.copy()
+        paths_s = paths.copy()
         args = (change, change_at, p1a, p1b, p2a, p2b, m, weight, n)
-        got = _step_vector(cost, out_v, at, prev, cur_v, *args)
-        want = _step_scalar(cost, out_s, at, prev, cur_s, *args)
+        got = _step_vector(cost, out_v, at, paths, prev_at, cur_at, *args)
+        want = _step_scalar(cost, out_s, at, paths_s, prev_at, cur_at, *args)
         assert np.float32(got).tobytes() == np.float32(want).tobytes()
-        assert cur_v.tobytes() == cur_s.tobytes()
+        assert paths.tobytes() == paths_s.tobytes()
         assert out_v.tobytes() == out_s.tobytes()
 
 
 def test_a_path_step_over_whole_vectors_is_the_scalar_step(rng):
     """The whole range's step a vector at a time: each vector's neighbours from the next
     and the last one, the element past the vectors from memory (a band's infinite end or
-    the next candidate, taken one by one after them), writing or adding."""
+    the next candidate, taken one by one after them), writing or adding; the pixel's
+    costs, changes and path costs at offsets of their arrays."""
     for trial in range(200):
         chunks = int(rng.integers(0, 6))
         size = chunks * LANES + int(rng.integers(0, LANES)) + 2
-        prev = (rng.random(size) * 4).astype(np.float32)
-        prev[rng.random(size) < 0.15] = np.inf
-        src = (rng.random(size) * 3).astype(np.float32)
-        change = (rng.random(size) < 0.5).astype(np.uint8)
+        room = 2 * size + 8
+        paths = (rng.random(room) * 4).astype(np.float32)
+        paths[rng.random(room) < 0.15] = np.inf
+        prev_at, cur_at = (int(rng.integers(0, 4)), size + int(rng.integers(0, 4)))
+        if trial % 3 == 0:
+            prev_at, cur_at = cur_at, prev_at
+        at, change_at = int(rng.integers(0, 9)), int(rng.integers(0, 9))
+        cost = (rng.random(size + 9) * 3).astype(np.float32)
+        change = (rng.random(size + 9) < 0.5).astype(np.uint8)
         # The previous minimum: no path cost falls below it (as the int32 minimum takes).
+        prev = paths[prev_at:prev_at + size]
         finite = prev[np.isfinite(prev)]
         m = np.float32(finite.min() if finite.size else 0.0)
-        args = (change, np.float32(0.5), np.float32(0.25), m + np.float32(2.0),
+        args = (change, change_at, np.float32(0.5), np.float32(0.25), m + np.float32(2.0),
                 m + np.float32(1.0), m, np.float32(0.25), chunks, trial % 2 == 0)
-        dst_v = rng.random(size).astype(np.float32)
-        dst_s = dst_v.copy()
-        cur_v = np.full(size, -1, np.float32)
-        cur_s = cur_v.copy()
-        got = _chunks_vector(src, dst_v, prev, cur_v, *args)
-        want = _chunks_scalar(src, dst_s, prev, cur_s, *args)
+        out_v = rng.random(size + 9).astype(np.float32)
+        out_s = out_v.copy()
+        paths_s = paths.copy()
+        got = _chunks_vector(cost, out_v, at, paths, prev_at, cur_at, *args)
+        want = _chunks_scalar(cost, out_s, at, paths_s, prev_at, cur_at, *args)
         assert np.float32(got).tobytes() == np.float32(want).tobytes()
-        assert cur_v.tobytes() == cur_s.tobytes()
-        assert dst_v.tobytes() == dst_s.tobytes()
+        assert paths.tobytes() == paths_s.tobytes()
+        assert out_v.tobytes() == out_s.tobytes()
+
+
+def test_an_arm_in_lanes_adds_as_its_neighbours_one_by_one(rng):
+    """Bands that meet or not at every offset, neighbours before and after the pixel,
+    right arms shorter and longer than k, both passes (counting ones, and adding sizes)."""
+    for trial in range(300):
+        height, width, depth = 6, 9, int(rng.choice([LANES, LANES + 4]))
+        src = rng.random((height, width, depth)).astype(np.float32)
+        held = (rng.random((height, width, depth)) * 5).astype(np.float32)
+        lo = rng.integers(0, 12, (height, width)).astype(np.int32)
+        count = rng.integers(0, LANES + 1, (height, width)).astype(np.int32)
+        reach = rng.integers(0, 6, 40).astype(np.uint8)
+        pixel = int(rng.integers(12, height * width - 12))
+        stride = int(rng.choice([1, -1, width, -width]))
+        length = int(rng.integers(0, 2))  # 0 or 1 neighbour ...
+        length = int(rng.integers(0, 5)) if trial % 2 else length  # ... or up to 4
+        base, n = int(lo.flat[pixel]), int(rng.integers(1, LANES + 1))
+        reach_at, first_pass = int(rng.integers(0, 30)), bool(trial % 3 == 0)
+        total = rng.random(LANES).astype(np.float32)
+        size = rng.random(LANES).astype(np.float32)
+        want_total, want_size = total.copy(), size.copy()
+        args = (src, held, first_pass, lo, count, reach, reach_at, base, n, pixel, stride,
+                length)
+        _add_arm_each(want_total, want_size, *args)
+        _add_arm_vector(total, size, *args)
+        assert total.tobytes() == want_total.tobytes()
+        assert size.tobytes() == want_size.tobytes()
 
 
 @njit(cache=False)

@@ -126,6 +126,87 @@ def add_in_lanes(typingctx, total, size, src, src_at, held, held_at, first, stop
 
 
 @intrinsic
+def add_arm_in_lanes(typingctx, total, size, src, held, first_pass, lo, count, reach, reach_at,
+                     base, n, pixel, stride, length):
+    """:func:`add_in_lanes` over one arm of a pixel with a band of ``n`` candidates from
+    ``base``: for k = 1 .. ``length`` the neighbour at flat pixel index ``pixel + k *
+    stride`` (its band ``lo.flat``, ``count.flat`` there) adds, where the two bands meet
+    within a vector (offset ``off`` = ``base`` less its ``lo``, -LANES < off < LANES),
+    lanes ``max(0, -off) <= d < min(n, its count - off)`` with ``k <= reach.flat[reach_at +
+    d]`` of its ``src`` and ``held`` (volumes of one shape, (H, W, depth): its candidates
+    from ``off`` on; ones with ``first_pass``) to ``total`` and ``size``: the same
+    additions in the same order as a call a neighbour, the sums kept in registers rather
+    than stored and loaded each time.
+    The caller makes sure each neighbour's vector lies inside ``src``."""
+    _arrays(total=(total, types.float32), size=(size, types.float32),
+            src=(src, types.float32), held=(held, types.float32), lo=(lo, types.int32),
+            count=(count, types.int32), reach=(reach, types.uint8))
+    if src.ndim != 3:
+        raise TypingError(f"lanes: src must be a volume (H, W, depth), got {src}")
+    sig = types.void(total, size, src, held, first_pass, lo, count, reach, reach_at, base, n,
+                     pixel, stride, length)
+
+    def codegen(context, builder, signature, args):
+        v = _Lanes(context, builder, signature, args)
+        origin = v.constant_index(0)
+        sums = cgutils.alloca_once(builder, _VF)
+        sizes = cgutils.alloca_once(builder, _VF)
+        builder.store(v.load(0, origin), sums)
+        builder.store(v.load(1, origin), sizes)
+        reach_lanes = builder.zext(v.load(7, v.index(8), _U8), _VI)  # the same for each k
+        first_pass = context.cast(builder, args[4], signature.args[4], types.boolean)
+        base, n, pixel, stride = (v.index(i) for i in (9, 10, 11, 12))
+        n32 = builder.trunc(n, _I32)
+        zero, ones = ir.Constant(_VF, [0.0] * LANES), ir.Constant(_VF, [1.0] * LANES)
+        int_zero = ir.Constant(_I32, 0)
+        source = context.make_array(signature.args[2])(context, builder, args[2])
+        depth = builder.extract_value(source.shape, 2)
+
+        def arm_loop(first_pass):
+            """The loop over k; ``first_pass``: each lane inside counts as one (``held``
+            is not read)."""
+            with cgutils.for_range(builder, v.index(13)) as loop:
+                k = builder.add(loop.index, v.constant_index(1))
+                neighbour = builder.add(pixel, builder.mul(k, stride))
+                off = builder.sub(base, builder.sext(builder.load(
+                    builder.gep(v.data(5), [neighbour])), base.type))
+                meets = builder.and_(builder.icmp_signed(">", off, v.constant_index(-LANES)),
+                                     builder.icmp_signed("<", off, v.constant_index(LANES)))
+                with builder.if_then(meets, likely=True):
+                    off32 = builder.trunc(off, _I32)
+                    first = builder.sub(int_zero, off32)
+                    first = builder.select(builder.icmp_signed(">", first, int_zero), first,
+                                           int_zero)
+                    stop = builder.sub(builder.load(builder.gep(v.data(6), [neighbour])),
+                                       off32)
+                    stop = builder.select(builder.icmp_signed("<", n32, stop), n32, stop)
+                    inside = builder.and_(
+                        builder.and_(
+                            builder.icmp_signed(">=", _LANE_NUMBERS, v.splat(first, _VI)),
+                            builder.icmp_signed("<", _LANE_NUMBERS, v.splat(stop, _VI))),
+                        builder.icmp_signed("<=", v.splat(builder.trunc(k, _I32), _VI),
+                                            reach_lanes))
+                    at = builder.add(builder.mul(neighbour, depth), off)
+                    added = builder.select(inside, v.load(2, at), zero)
+                    builder.store(builder.fadd(builder.load(sums), added), sums)
+                    held_lanes = ones if first_pass else v.load(3, at)
+                    builder.store(builder.fadd(builder.load(sizes),
+                                               builder.select(inside, held_lanes, zero)),
+                                  sizes)
+
+        with builder.if_else(first_pass) as (counting, summing):
+            with counting:
+                arm_loop(True)
+            with summing:
+                arm_loop(False)
+        v.store(builder.load(sums), 0, origin)
+        v.store(builder.load(sizes), 1, origin)
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@intrinsic
 def copy_lanes(typingctx, dst, dst_at, src, src_at):
     """``dst.flat[dst_at:dst_at + LANES] = src.flat[src_at:src_at + LANES]``."""
     _arrays(dst=(dst, types.float32), src=(src, types.float32))
@@ -194,45 +275,50 @@ def _float_of_least(builder, bits):
 
 
 @intrinsic
-def path_step_lanes(typingctx, cost, out, at, prev, cur, change, change_at, p1a, p1b, p2a,
-                    p2b, m, weight, n):
+def path_step_lanes(typingctx, cost, out, at, paths, prev_at, cur_at, change, change_at, p1a,
+                    p1b, p2a, p2b, m, weight, n):
     """One step of the path recursion over a band of ``n`` <= LANES candidates; returns
     the new path minimum. Per lane d, as ``_kernels.scanline`` writes it for one:
 
         v = cost.flat[at + d] + path_step(prev, d, P1, P2) - m   (P: b where ``change``
         is nonzero at ``change_at + d``, a elsewhere; infinite from ``n`` on),
-        cur[d + 1] = v,  out.flat[at + d] += weight * v.
+        cur[d + 1] = v,  out.flat[at + d] += weight * v,
 
-    ``prev`` holds the previous path costs at 1 + d with both ends at 0 and LANES + 1.
-    Its lanes are read as the last step stored them, one vector, and shuffled against
-    the two ends for d - 1 and d + 1: loads straddling a vector's store wait until it
-    reaches the cache (three such loads made the step 1.8x slower than the scalar loop)."""
-    _arrays(cost=(cost, types.float32), out=(out, types.float32), prev=(prev, types.float32),
-            cur=(cur, types.float32), change=(change, types.uint8))
-    sig = types.float32(cost, out, at, prev, cur, change, change_at, p1a, p1b, p2a, p2b, m,
-                        weight, n)
+    where ``prev`` and ``cur`` are the LANES + 2 path costs of ``paths`` from flat index
+    ``prev_at`` and ``cur_at`` (one array for both: a view of its rows would cost two
+    atomic reference counts a step). ``prev`` holds the previous path costs at 1 + d with
+    both ends at 0 and LANES + 1. Its lanes are read as the last step stored them, one
+    vector, and shuffled against the two ends for d - 1 and d + 1: loads straddling a
+    vector's store wait until it reaches the cache (three such loads made the step 1.8x
+    slower than the scalar loop)."""
+    _arrays(cost=(cost, types.float32), out=(out, types.float32),
+            paths=(paths, types.float32), change=(change, types.uint8))
+    sig = types.float32(cost, out, at, paths, prev_at, cur_at, change, change_at, p1a, p1b,
+                        p2a, p2b, m, weight, n)
 
     def codegen(context, builder, signature, args):
         v = _Lanes(context, builder, signature, args)
+        prev = v.index(4)
         one = v.constant_index(1)
-        stay = v.load(3, one)
+        stay = v.load(3, builder.add(prev, one))
         ends = ir.Constant(_VF, ir.Undefined)
         for lane, position in ((0, 0), (1, LANES + 1)):
-            ends = builder.insert_element(ends, v.element(3, v.constant_index(position)),
-                                          ir.Constant(_I32, lane))
+            ends = builder.insert_element(
+                ends, v.element(3, builder.add(prev, v.constant_index(position))),
+                ir.Constant(_I32, lane))
         # Lanes 0..7 are ``stay``'s, LANES the lower end, LANES + 1 the upper.
         below = builder.shuffle_vector(stay, ends,
                                        ir.Constant(_VI, [LANES] + list(range(LANES - 1))))
         above = builder.shuffle_vector(stay, ends,
                                        ir.Constant(_VI, list(range(1, LANES)) + [LANES + 1]))
         at = v.index(2)
-        step = _path_costs(v, below, stay, above, v.load(5, v.index(6), _U8),
-                           [v.float_lanes(i) for i in (7, 8, 9, 10)], v.load(0, at),
-                           v.float_lanes(11))
-        inside = builder.icmp_signed("<", _LANE_NUMBERS, v.int_lanes(13))
+        step = _path_costs(v, below, stay, above, v.load(6, v.index(7), _U8),
+                           [v.float_lanes(i) for i in (8, 9, 10, 11)], v.load(0, at),
+                           v.float_lanes(12))
+        inside = builder.icmp_signed("<", _LANE_NUMBERS, v.int_lanes(14))
         step = builder.select(inside, step, ir.Constant(_VF, [float("inf")] * LANES))
-        v.store(step, 4, one)
-        v.store(builder.fadd(v.load(1, at), builder.fmul(v.float_lanes(12), step)), 1, at)
+        v.store(step, 3, builder.add(v.index(5), one))
+        v.store(builder.fadd(v.load(1, at), builder.fmul(v.float_lanes(13), step)), 1, at)
         return _float_of_least(builder, builder.bitcast(step, _VI))
 
     return sig, codegen
@@ -241,53 +327,56 @@ def path_step_lanes(typingctx, cost, out, at, prev, cur, change, change_at, p1a,
 def _path_step_chunks(write):
     """:func:`path_step_lanes` over the whole of a pixel's ``chunks`` x LANES candidates
     (the whole range, or a band wider than a vector), a vector at a time; with ``write``
-    the step writes ``weight`` x its path costs to ``dst`` rather than adds them."""
+    the step writes ``weight`` x its path costs to ``out`` rather than adds them."""
 
     @intrinsic
-    def path_step_chunks(typingctx, src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m, weight,
-                         chunks):
+    def path_step_chunks(typingctx, cost, out, at, paths, prev_at, cur_at, change, change_at,
+                         p1a, p1b, p2a, p2b, m, weight, chunks):
         """Candidates 0 .. LANES x ``chunks`` - 1 of one step of the path recursion
         (``_kernels.scanline``'s ``next_step``, the same operations lane by lane) from the
-        pixel's views ``src``, ``dst``, ``change``; returns their least path cost
-        (infinite without chunks). ``prev``: the previous path costs at 1 + d, the lower
-        end at 0, read a vector at a time as the last step stored them, each vector's
-        neighbours shuffled in from the next and the last one: loads straddling two
-        vectors' stores wait until they reach the cache."""
-        _arrays(src=(src, types.float32), dst=(dst, types.float32),
-                prev=(prev, types.float32), cur=(cur, types.float32),
-                change=(change, types.uint8))
-        sig = types.float32(src, dst, prev, cur, change, p1a, p1b, p2a, p2b, m, weight,
-                            chunks)
+        pixel's costs at flat index ``at`` of ``cost`` and ``out`` and its changes at
+        ``change_at`` of ``change``; returns their least path cost (infinite without
+        chunks). ``paths``: the previous path costs from ``prev_at`` (at 1 + d, the lower
+        end at 0), read a vector at a time as the last step stored them, each vector's
+        neighbours shuffled in from the next and the last one (loads straddling two
+        vectors' stores wait until they reach the cache), the new ones written from
+        ``cur_at``."""
+        _arrays(cost=(cost, types.float32), out=(out, types.float32),
+                paths=(paths, types.float32), change=(change, types.uint8))
+        sig = types.float32(cost, out, at, paths, prev_at, cur_at, change, change_at, p1a,
+                            p1b, p2a, p2b, m, weight, chunks)
 
         def codegen(context, builder, signature, args):
             v = _Lanes(context, builder, signature, args)
-            n_chunks = v.index(11)
+            at, prev, cur, change_at = v.index(2), v.index(4), v.index(5), v.index(7)
+            n_chunks = v.index(14)
             one = v.constant_index(1)
             # Carried from vector to vector: the last one's path costs (its lane 7 is the
             # lower neighbour of this one's lane 0), this one's, the least so far.
             behind = cgutils.alloca_once(builder, _VF)
             here = cgutils.alloca_once(builder, _VF)
             least = cgutils.alloca_once(builder, _VI)
-            lower_end = v.element(2, v.constant_index(0))
+            lower_end = v.element(3, prev)
             builder.store(builder.insert_element(ir.Constant(_VF, ir.Undefined), lower_end,
                                                  ir.Constant(_I32, LANES - 1)), behind)
-            builder.store(v.load(2, one), here)
+            builder.store(v.load(3, builder.add(prev, one)), here)
             builder.store(ir.Constant(_VI, [_INF_BITS] * LANES), least)
-            penalties = [v.float_lanes(i) for i in (5, 6, 7, 8)]
-            m, w = v.float_lanes(9), v.float_lanes(10)
+            penalties = [v.float_lanes(i) for i in (8, 9, 10, 11)]
+            m, w = v.float_lanes(12), v.float_lanes(13)
             with cgutils.for_range(builder, n_chunks) as loop:
                 base = builder.mul(loop.index, v.constant_index(LANES))
-                next_base = builder.add(base, v.constant_index(LANES + 1))
+                next_base = builder.add(builder.add(prev, base),
+                                        v.constant_index(LANES + 1))
                 stay = builder.load(here)
                 is_last = builder.icmp_signed(">=", builder.add(loop.index, one), n_chunks)
                 with builder.if_else(is_last) as (last, more):
                     with last:  # the next path cost past the vectors: one element
                         ahead_last = builder.insert_element(
-                            ir.Constant(_VF, ir.Undefined), v.element(2, next_base),
+                            ir.Constant(_VF, ir.Undefined), v.element(3, next_base),
                             ir.Constant(_I32, 0))
                         last_block = builder.block
                     with more:
-                        ahead_more = v.load(2, next_base)
+                        ahead_more = v.load(3, next_base)
                         more_block = builder.block
                 ahead = builder.phi(_VF)
                 ahead.add_incoming(ahead_last, last_block)
@@ -297,13 +386,15 @@ def _path_step_chunks(write):
                     ir.Constant(_VI, [LANES - 1] + list(range(LANES, 2 * LANES - 1))))
                 above = builder.shuffle_vector(
                     stay, ahead, ir.Constant(_VI, list(range(1, LANES)) + [LANES]))
-                step = _path_costs(v, below, stay, above, v.load(4, base, _U8), penalties,
-                                   v.load(0, base), m)
-                v.store(step, 3, builder.add(base, one))
+                cell = builder.add(at, base)
+                step = _path_costs(v, below, stay, above,
+                                   v.load(6, builder.add(change_at, base), _U8), penalties,
+                                   v.load(0, cell), m)
+                v.store(step, 3, builder.add(builder.add(cur, base), one))
                 weighted = builder.fmul(w, step)
                 if not write:
-                    weighted = builder.fadd(v.load(1, base), weighted)
-                v.store(weighted, 1, base)
+                    weighted = builder.fadd(v.load(1, cell), weighted)
+                v.store(weighted, 1, cell)
                 bits = builder.bitcast(step, _VI)
                 so_far = builder.load(least)
                 builder.store(builder.select(builder.icmp_signed("<", bits, so_far), bits,

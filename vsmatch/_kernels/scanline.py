@@ -4,77 +4,90 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS, ROW_OPTIONS
 from .lanes import LANES, path_step_chunks_add, path_step_chunks_write, path_step_lanes
 
+# Path costs live in one flat array per walk (``paths``), each pixel's LANES or depth + 2
+# of them from a flat index, and the volumes are read by flat index too: a view of a row
+# or a pixel in the walk's loop costs two atomic reference counts a step, on a count that
+# every thread shares (measured on coarse-to-fine's band kernels, one thread: rows 139 ->
+# 51 ms, columns 156 -> 64 ms over four pairs, the same bytes).
+
 
 @njit(inline="always")
-def path_step(prev, d, p1, p2_total):
-    """The least way into disparity d from the previous pixel's path costs ``prev`` (at
-    1 + d, infinite at both ends): stay (prev), step by one (+ P1), or jump from the
-    previous minimum (``p2_total`` = P2 + that minimum). Selects, not ``min``: Numba's
-    NaN-aware ``min`` compiles into branches that stop LLVM vectorising the loop."""
-    a = prev[d]
-    b = prev[d + 2]
+def path_step(paths, at, d, p1, p2_total):
+    """The least way into disparity d from the previous pixel's path costs (``paths``
+    from flat index ``at``, at 1 + d, infinite at both ends): stay, step by one (+ P1), or
+    jump from the previous minimum (``p2_total`` = P2 + that minimum). Selects, not
+    ``min``: Numba's NaN-aware ``min`` compiles into branches that stop LLVM vectorising
+    the loop."""
+    a = paths[at + d]
+    b = paths[at + d + 2]
     jump = (a if a < b else b) + p1
-    stay = prev[d + 1]
+    stay = paths[at + d + 1]
     best = stay if stay < p2_total else p2_total
     return best if best < jump else jump
 
 
 def _path_steps(write, lanes):
-    """The two steps of the path recursion, adding ``weight`` x the path cost to ``dst``,
+    """The two steps of the path recursion, adding ``weight`` x the path cost to ``out``,
     or with ``write`` (a constant to the compiler, so no test is left in the loops, which
     would stop LLVM vectorising them) writing it: the first walk of a volume writes every
     cell, so the volume needs no zeroing beforehand. With ``lanes`` (a constant too) a
     step takes :data:`LANES` candidates, one vector where a narrow band's short loop would
-    not vectorise; those from the band's ``n`` on are infinite."""
+    not vectorise; those from the band's ``n`` on are infinite. ``cost`` and ``out`` are
+    the volumes flat, the pixel's candidates from ``at``; ``paths`` the walk's path costs,
+    the previous pixel's from ``prev_at``, this one's written from ``cur_at``."""
 
     @njit(inline="always")
-    def keep(cur, dst, d, v, weight):
-        """Candidate d's path cost ``v`` into ``cur`` (at 1 + d) and ``weight`` x it into
-        ``dst``."""
-        cur[d + 1] = v
+    def keep(paths, cur_at, out, at, d, v, weight):
+        """Candidate d's path cost ``v`` into the path costs (at 1 + d) and ``weight`` x
+        it into ``out``."""
+        paths[cur_at + d + 1] = v
         if write:
-            dst[d] = weight * v
+            out[at + d] = weight * v
         else:
-            dst[d] += weight * v
+            out[at + d] += weight * v
 
     @njit(inline="always")
-    def first_step(src, dst, cur, weight, n):
+    def first_step(cost, out, at, paths, cur_at, weight, n):
         """The path starts: its cost is the matching cost. Returns its minimum over d."""
         new_min = np.float32(np.inf)
         for d in range(LANES if lanes else n):
-            v = src[d]
+            v = cost[at + d]
             if lanes:
                 v = v if d < n else np.float32(np.inf)
-            keep(cur, dst, d, v, weight)
+            keep(paths, cur_at, out, at, d, v, weight)
             new_min = v if v < new_min else new_min
         return new_min
 
     @njit(inline="always")
-    def next_step(src, dst, prev, cur, change_r, p1a, p1b, p2a, p2b, prev_min, weight, n):
+    def next_step(cost, out, at, paths, prev_at, cur_at, change_r, change_at, p1a, p1b, p2a,
+                  p2b, prev_min, weight, n):
         """One step of the path recursion over all d; returns the new minimum over d.
 
-        ``prev``, ``cur``: path costs at 1 + d, with inf at both ends so that d - 1 and
-        d + 1 need no tests. ``change_r[d]`` picks the penalties: (p1a, p2a) where the
-        right image does not change at disparity d, (p1b, p2b) where it does. A narrow
-        band (``lanes``) takes one vector of LANES, the whole range and wider bands their
+        The path costs hold inf at both ends so that d - 1 and d + 1 need no tests.
+        ``change_r[change_at + d]`` picks the penalties: (p1a, p2a) where the right image
+        does not change at disparity d, (p1b, p2b) where it does. A narrow band
+        (``lanes``) takes one vector of LANES, the whole range and wider bands their
         whole vectors (``_kernels.lanes``: the same operations lane by lane) and the rest
         one by one, with ``a if a < b else b`` rather than ``min``, whose NaN handling
         Numba compiles into branches.
         """
         if lanes:
-            return path_step_lanes(src, dst, 0, prev, cur, change_r, 0, p1a, p1b, p2a, p2b,
-                                   prev_min, weight, n)
+            return path_step_lanes(cost, out, at, paths, prev_at, cur_at, change_r,
+                                   change_at, p1a, p1b, p2a, p2b, prev_min, weight, n)
         chunks = n // LANES
         if write:
-            new_min = path_step_chunks_write(src, dst, prev, cur, change_r, p1a, p1b, p2a,
-                                             p2b, prev_min, weight, chunks)
+            new_min = path_step_chunks_write(cost, out, at, paths, prev_at, cur_at, change_r,
+                                             change_at, p1a, p1b, p2a, p2b, prev_min, weight,
+                                             chunks)
         else:
-            new_min = path_step_chunks_add(src, dst, prev, cur, change_r, p1a, p1b, p2a, p2b,
-                                           prev_min, weight, chunks)
+            new_min = path_step_chunks_add(cost, out, at, paths, prev_at, cur_at, change_r,
+                                           change_at, p1a, p1b, p2a, p2b, prev_min, weight,
+                                           chunks)
         for d in range(chunks * LANES, n):
-            c = change_r[d]
-            v = src[d] + path_step(prev, d, p1b if c else p1a, p2b if c else p2a) - prev_min
-            keep(cur, dst, d, v, weight)
+            c = change_r[change_at + d]
+            v = cost[at + d] + path_step(paths, prev_at, d, p1b if c else p1a,
+                                         p2b if c else p2a) - prev_min
+            keep(paths, cur_at, out, at, d, v, weight)
             new_min = v if v < new_min else new_min
         return new_min
 
@@ -82,16 +95,16 @@ def _path_steps(write, lanes):
 
 
 @njit(inline="always")
-def _rebase(prev, tmp, off, n_prev, n):
-    """``prev``, the previous pixel's path costs at 1 + k over its band of ``n_prev``
-    candidates, re-indexed in place to this pixel's band of ``n``, whose candidate k is the
-    previous band's k + ``off``: infinite where the previous band has no such candidate,
-    for k from -1 to n (all that :func:`path_step` reads)."""
+def _rebase(paths, prev_at, tmp, off, n_prev, n):
+    """The previous pixel's path costs (``paths`` from ``prev_at``, at 1 + k over its band
+    of ``n_prev`` candidates) re-indexed in place to this pixel's band of ``n``, whose
+    candidate k is the previous band's k + ``off``: infinite where the previous band has no
+    such candidate, for k from -1 to n (all that :func:`path_step` reads)."""
     for j in range(-1, n + 1):
         i = j + off
-        tmp[j + 1] = prev[i + 1] if 0 <= i < n_prev else np.float32(np.inf)
+        tmp[j + 1] = paths[prev_at + i + 1] if 0 <= i < n_prev else np.float32(np.inf)
     for j in range(n + 2):
-        prev[j] = tmp[j]
+        paths[prev_at + j] = tmp[j]
 
 
 def _walk_steps(banded, write):
@@ -104,56 +117,58 @@ def _walk_steps(banded, write):
     first_lanes, next_lanes = _path_steps(write, True)
 
     @njit(inline="always")
-    def walk_step(cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y, x,
-                  ey, ex, prev_lo, prev_n, m, prev, cur, tmp):
+    def walk_step(cost, out, depth, lo, count, change_l, change_r, padded, p1s, p2s, weight,
+                  y, x, ey, ex, prev_lo, prev_n, m, paths, prev_at, cur_at, tmp):
         """Pixel (y, x) of a path; the edge crossed from the previous pixel is stored at
         (ey, ex); the previous pixel's band was ``prev_lo``, ``prev_n`` (-1 before the
-        path starts) and its path minimum ``m``. Returns this pixel's three. A pixel
-        without a band restarts the path."""
+        path starts) and its path minimum ``m``, its path costs in ``paths`` from
+        ``prev_at``; this pixel's go from ``cur_at``. ``cost``, ``out``: the volumes
+        flat, ``depth`` candidates a pixel; ``change_r``: the right view's change map,
+        reversed and padded to rows of ``padded``, flat. Returns this pixel's band and
+        minimum. A pixel without a band restarts the path."""
         width = lo.shape[1]
         base = np.int64(lo[y, x]) if banded else np.int64(0)
-        n = np.int64(count[y, x]) if banded else np.int64(cost.shape[2])
+        n = np.int64(count[y, x]) if banded else depth
         if banded and n <= 0:
             return base, np.int64(-1), m
-        src = cost[y, x]
-        dst = out[y, x]
+        at = (y * width + x) * depth
         # A narrow band in a volume deep enough takes one vector a step.
-        lanes = banded and n <= LANES and cost.shape[2] >= LANES
+        lanes = banded and n <= LANES and depth >= LANES
         # ``not banded`` is tested first though its branch repeats the last one: a constant,
         # it spares the whole-range kernels the lanes step (``lanes`` is known at run time
         # only; without it the row kernel compiled 0.7 s longer, 4.3 -> 5.0 s).
         if prev_n < 0:  # the path starts: its cost is the matching cost
             if not banded:
-                new_min = first_whole(src, dst, cur, weight, n)
+                new_min = first_whole(cost, out, at, paths, cur_at, weight, n)
             elif lanes:
-                new_min = first_lanes(src, dst, cur, weight, n)
+                new_min = first_lanes(cost, out, at, paths, cur_at, weight, n)
             else:
-                new_min = first_whole(src, dst, cur, weight, n)
+                new_min = first_whole(cost, out, at, paths, cur_at, weight, n)
         else:
             if banded and (base != prev_lo or n != prev_n):
                 # A vector's step reads the path costs of all its lanes.
-                _rebase(prev, tmp, base - prev_lo, prev_n,
+                _rebase(paths, prev_at, tmp, base - prev_lo, prev_n,
                         max(n, np.int64(LANES)) if lanes else n)
             cl = change_l[ey, ex]
-            change_r = change_r_rev[ey, width - 1 - ex + base:]
+            change_at = ey * padded + width - 1 - ex + base
             p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
             if not banded:
-                new_min = next_whole(src, dst, prev, cur, change_r, p1a, p1b, p2a, p2b, m,
-                                     weight, n)
+                new_min = next_whole(cost, out, at, paths, prev_at, cur_at, change_r,
+                                     change_at, p1a, p1b, p2a, p2b, m, weight, n)
             elif lanes:
-                new_min = next_lanes(src, dst, prev, cur, change_r, p1a, p1b, p2a, p2b, m,
-                                     weight, n)
+                new_min = next_lanes(cost, out, at, paths, prev_at, cur_at, change_r,
+                                     change_at, p1a, p1b, p2a, p2b, m, weight, n)
             else:
-                new_min = next_whole(src, dst, prev, cur, change_r, p1a, p1b, p2a, p2b, m,
-                                     weight, n)
+                new_min = next_whole(cost, out, at, paths, prev_at, cur_at, change_r,
+                                     change_at, p1a, p1b, p2a, p2b, m, weight, n)
         if banded:
             # Past the band's ends the path is infinite (an earlier, wider band may have
             # left values there); a vector's lanes past its band are already.
-            cur[0] = np.float32(np.inf)
+            paths[cur_at] = np.float32(np.inf)
             if lanes:
-                cur[LANES + 1] = np.float32(np.inf)
+                paths[cur_at + LANES + 1] = np.float32(np.inf)
             else:
-                cur[n + 1] = np.float32(np.inf)
+                paths[cur_at + n + 1] = np.float32(np.inf)
         return base, n, new_min
 
     return walk_step
@@ -181,9 +196,11 @@ def _row_walks(banded):
 
     @njit(**_walks_options(banded))
     def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, y, out):
-        width, depth = cost.shape[1], cost.shape[2]
-        # Two path-cost rows, used in turn as previous and current.
-        paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
+        width, depth = cost.shape[1], np.int64(cost.shape[2])
+        flat_cost, flat_out = cost.reshape(-1), out.reshape(-1)
+        change_r, padded = change_r_rev.reshape(-1), change_r_rev.shape[1]
+        # Two pixels' path costs, used in turn as previous and current.
+        paths = np.full(2 * (depth + 2), np.inf, dtype=np.float32)
         tmp = np.empty(depth + 2, dtype=np.float32)
         prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
         if banded:
@@ -197,6 +214,7 @@ def _row_walks(banded):
                     prev_n = np.int64(-1)
                     continue
                 now = step % 2
+                prev_at, cur_at = (1 - now) * (depth + 2), now * (depth + 2)
                 # The edge crossed from the previous pixel: stored at the later of the two.
                 ex = x if direction == 1 else x + 1
                 # The whole range's first walk writes every cell (no zeroing beforehand),
@@ -204,16 +222,19 @@ def _row_walks(banded):
                 # took 7 s of compiling for a row of 8 floats.
                 if direction == 1 and not banded:
                     prev_lo, prev_n, m = _walk_whole_write(
-                        cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y,
-                        x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], tmp)
+                        flat_cost, flat_out, depth, lo, count, change_l, change_r, padded, p1s,
+                        p2s,
+                        weight, y, x, y, ex, prev_lo, prev_n, m, paths, prev_at, cur_at, tmp)
                 elif banded:
                     prev_lo, prev_n, m = _walk_band_add(
-                        cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y,
-                        x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], tmp)
+                        flat_cost, flat_out, depth, lo, count, change_l, change_r, padded, p1s,
+                        p2s,
+                        weight, y, x, y, ex, prev_lo, prev_n, m, paths, prev_at, cur_at, tmp)
                 else:
                     prev_lo, prev_n, m = _walk_whole_add(
-                        cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y,
-                        x, y, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], tmp)
+                        flat_cost, flat_out, depth, lo, count, change_l, change_r, padded, p1s,
+                        p2s,
+                        weight, y, x, y, ex, prev_lo, prev_n, m, paths, prev_at, cur_at, tmp)
 
     return walks
 
@@ -223,13 +244,18 @@ def _column_walks(banded):
 
     @njit(**_walks_options(banded))
     def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, x0, n, out):
-        height, depth = cost.shape[0], cost.shape[2]
-        prev = np.full((n, depth + 2), np.inf, dtype=np.float32)
-        cur = np.full((n, depth + 2), np.inf, dtype=np.float32)
+        height, depth = cost.shape[0], np.int64(cost.shape[2])
+        flat_cost, flat_out = cost.reshape(-1), out.reshape(-1)
+        change_r, padded = change_r_rev.reshape(-1), change_r_rev.shape[1]
+        # Each column's path costs, ``depth + 2`` a column, in two halves used in turn as
+        # the previous row's and the current one's.
+        line = depth + 2
+        paths = np.full(2 * n * line, np.inf, dtype=np.float32)
         tmp = np.empty(depth + 2, dtype=np.float32)
         prev_lo = np.zeros(n, dtype=np.int64)
         prev_n = np.empty(n, dtype=np.int64)
         mins = np.zeros(n, dtype=np.float32)
+        half = 0  # the previous row's half
         for direction in (1, -1):
             prev_n[:] = -1
             for step in range(height):
@@ -240,15 +266,19 @@ def _column_walks(banded):
                     if banded and count[y, x] <= 0:  # no band: the path restarts
                         prev_n[k] = -1
                         continue
+                    prev_at = (half * n + k) * line
+                    cur_at = ((1 - half) * n + k) * line
                     if banded:
                         prev_lo[k], prev_n[k], mins[k] = _walk_band_add(
-                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                            y, x, ey, x, prev_lo[k], prev_n[k], mins[k], prev[k], cur[k], tmp)
+                            flat_cost, flat_out, depth, lo, count, change_l, change_r,
+                            padded, p1s, p2s, weight, y, x, ey, x, prev_lo[k], prev_n[k],
+                            mins[k], paths, prev_at, cur_at, tmp)
                     else:
                         prev_lo[k], prev_n[k], mins[k] = _walk_whole_add(
-                            cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                            y, x, ey, x, prev_lo[k], prev_n[k], mins[k], prev[k], cur[k], tmp)
-                prev, cur = cur, prev
+                            flat_cost, flat_out, depth, lo, count, change_l, change_r,
+                            padded, p1s, p2s, weight, y, x, ey, x, prev_lo[k], prev_n[k],
+                            mins[k], paths, prev_at, cur_at, tmp)
+                half = 1 - half
 
     return walks
 
@@ -259,7 +289,10 @@ def _diagonal_walks(banded):
 
     @njit(**_walks_options(banded))
     def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, step_x, weight, line, out):
-        height, width, depth = cost.shape
+        height, width = cost.shape[0], cost.shape[1]
+        depth = np.int64(cost.shape[2])
+        flat_cost, flat_out = cost.reshape(-1), out.reshape(-1)
+        change_r, padded = change_r_rev.reshape(-1), change_r_rev.shape[1]
         # Line starts on the top row, then down the first column (last for step_x = -1).
         if line < width:
             y0, x0 = 0, line if step_x == 1 else width - 1 - line
@@ -267,7 +300,7 @@ def _diagonal_walks(banded):
             y0, x0 = line - width + 1, 0 if step_x == 1 else width - 1
         room_x = width - 1 - x0 if step_x == 1 else x0
         length = min(height - y0, room_x + 1)
-        paths = np.full((2, depth + 2), np.inf, dtype=np.float32)
+        paths = np.full(2 * (depth + 2), np.inf, dtype=np.float32)
         tmp = np.empty(depth + 2, dtype=np.float32)
         prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
         for direction in (1, -1):
@@ -281,17 +314,20 @@ def _diagonal_walks(banded):
                     prev_n = np.int64(-1)
                     continue
                 now = step % 2
+                prev_at, cur_at = (1 - now) * (depth + 2), now * (depth + 2)
                 # The edge crossed is stored at the later pixel of the two, top to bottom.
                 ey = y if direction == 1 else y + 1
                 ex = x if direction == 1 else x + step_x
                 if banded:
                     prev_lo, prev_n, m = _walk_band_add(
-                        cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y,
-                        x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], tmp)
+                        flat_cost, flat_out, depth, lo, count, change_l, change_r, padded, p1s,
+                        p2s,
+                        weight, y, x, ey, ex, prev_lo, prev_n, m, paths, prev_at, cur_at, tmp)
                 else:
                     prev_lo, prev_n, m = _walk_whole_add(
-                        cost, out, lo, count, change_l, change_r_rev, p1s, p2s, weight, y,
-                        x, ey, ex, prev_lo, prev_n, m, paths[1 - now], paths[now], tmp)
+                        flat_cost, flat_out, depth, lo, count, change_l, change_r, padded, p1s,
+                        p2s,
+                        weight, y, x, ey, ex, prev_lo, prev_n, m, paths, prev_at, cur_at, tmp)
 
     return walks
 
@@ -356,38 +392,42 @@ def _diagonal_kernel(banded):
     return diagonal
 
 
+#: One pixel's path costs over a band in a volume LANES deep: LANES, and an end either side.
+_LANE_PATHS = LANES + 2
+
+
 @njit(inline="always")
-def _lanes_step(cost, out, y, x, ey, ex, n, base, prev_lo, prev_n, m, started, prev, cur,
-                tmp, change_l, change_r_rev, p1s, p2s, weight):
+def _lanes_step(cost, out, y, x, ey, ex, n, base, prev_lo, prev_n, m, started, paths, prev_at,
+                cur_at, tmp, change_l, change_r_rev, p1s, p2s, weight):
     """One pixel's step of a path over a band of ``n`` <= LANES candidates from ``base`` in
     a volume LANES deep, adding ``weight`` x its path costs to ``out``; returns the path's
     minimum. The steps of ``_walk_band_add`` for such a band, the same sums in the same
     order, as one vector (``_kernels.lanes``) and without the bookkeeping of wider bands
-    and volumes. ``prev``: the previous pixel's path costs (band ``prev_lo``, ``prev_n``;
-    ``started`` False: none)."""
+    and volumes. ``paths`` from ``prev_at``: the previous pixel's path costs (band
+    ``prev_lo``, ``prev_n``; ``started`` False: none); this pixel's go from ``cur_at``."""
     inf = np.float32(np.inf)
     if not started:  # the path starts: its cost is the matching cost
         new_min = inf
         for d in range(LANES):
             v = cost[y, x, d]
             v = v if d < n else inf
-            cur[d + 1] = v
+            paths[cur_at + d + 1] = v
             out[y, x, d] += weight * v
             new_min = v if v < new_min else new_min
     else:
         # Two bands from one ``lo`` need no rebase: a step leaves its lanes past its band,
         # and both ends, infinite.
         if base != prev_lo:
-            _rebase(prev, tmp, base - prev_lo, prev_n, np.int64(LANES))
+            _rebase(paths, prev_at, tmp, base - prev_lo, prev_n, np.int64(LANES))
         cl = change_l[ey, ex]
         start = cost.shape[1] - 1 - ex + base  # change_r_rev's column of disparity base
         p1a, p1b, p2a, p2b = p1s[cl], p1s[cl + 1], m + p2s[cl], m + p2s[cl + 1]
-        new_min = path_step_lanes(cost, out, (y * cost.shape[1] + x) * LANES, prev, cur,
-                                  change_r_rev, ey * change_r_rev.shape[1] + start,
+        new_min = path_step_lanes(cost, out, (y * cost.shape[1] + x) * LANES, paths, prev_at,
+                                  cur_at, change_r_rev, ey * change_r_rev.shape[1] + start,
                                   p1a, p1b, p2a, p2b, m, weight, n)
     # Lanes from ``n`` on are infinite already: only the ends are set.
-    cur[0] = inf
-    cur[LANES + 1] = inf
+    paths[cur_at] = inf
+    paths[cur_at + LANES + 1] = inf
     return new_min
 
 
@@ -397,8 +437,8 @@ def rows_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, o
     the same sums, 1.4x faster than the general band kernel (cones' bands)."""
     height, width, depth = cost.shape
     for y in prange(height):
-        paths = np.full((2, LANES + 2), np.inf, dtype=np.float32)
-        tmp = np.empty(LANES + 2, dtype=np.float32)
+        paths = np.full(2 * _LANE_PATHS, np.inf, dtype=np.float32)  # previous, current
+        tmp = np.empty(_LANE_PATHS, dtype=np.float32)
         out[y] = np.float32(0.0)  # both walks add
         for direction in (1, -1):
             start = 0 if direction == 1 else width - 1
@@ -414,8 +454,8 @@ def rows_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, o
                 ex = x if direction == 1 else x + 1  # the edge crossed, at the later pixel
                 base = np.int64(lo[y, x])
                 m = _lanes_step(cost, out, y, x, y, ex, n, base, prev_lo, prev_n, m, started,
-                                paths[1 - now], paths[now], tmp, change_l, change_r_rev, p1s,
-                                p2s, weight)
+                                paths, (1 - now) * _LANE_PATHS, now * _LANE_PATHS, tmp,
+                                change_l, change_r_rev, p1s, p2s, weight)
                 started = True
                 prev_lo, prev_n = base, n
 
@@ -429,13 +469,15 @@ def columns_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight
     for c in prange(n_chunks):
         x0 = c * chunk
         n_cols = min(width, x0 + chunk) - x0
-        prev = np.full((n_cols, LANES + 2), np.inf, dtype=np.float32)
-        cur = np.full((n_cols, LANES + 2), np.inf, dtype=np.float32)
-        tmp = np.empty(LANES + 2, dtype=np.float32)
+        # Each column's path costs, in two halves used in turn as the previous row's and
+        # the current one's.
+        paths = np.full(2 * n_cols * _LANE_PATHS, np.inf, dtype=np.float32)
+        tmp = np.empty(_LANE_PATHS, dtype=np.float32)
         prev_lo = np.zeros(n_cols, dtype=np.int64)
         prev_n = np.zeros(n_cols, dtype=np.int64)
         started = np.zeros(n_cols, dtype=np.bool_)
         mins = np.zeros(n_cols, dtype=np.float32)
+        half = 0  # the previous row's half
         for direction in (1, -1):
             started[:] = False
             for step in range(height):
@@ -449,12 +491,14 @@ def columns_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight
                         continue
                     base = np.int64(lo[y, x])
                     mins[k] = _lanes_step(cost, out, y, x, ey, x, n, base, prev_lo[k],
-                                          prev_n[k], mins[k], started[k], prev[k], cur[k], tmp,
+                                          prev_n[k], mins[k], started[k], paths,
+                                          (half * n_cols + k) * _LANE_PATHS,
+                                          ((1 - half) * n_cols + k) * _LANE_PATHS, tmp,
                                           change_l, change_r_rev, p1s, p2s, weight)
                     started[k] = True
                     prev_lo[k] = base
                     prev_n[k] = n
-                prev, cur = cur, prev
+                half = 1 - half
 
 
 #: The kernels for the whole range and for bands, each compiled on its first call.
