@@ -33,7 +33,7 @@ def colour_change(image: np.ndarray, threshold: float, *, along_rows: bool) -> n
     and in the first column (row), which has no previous pixel."""
     image = as_channels(image)
     out = np.empty(image.shape[:2], dtype=np.uint8)
-    colour_change_kernel(image, float(threshold), int(along_rows), out)
+    colour_change_kernel(image, float(threshold), bool(along_rows), out)
     return out
 
 
