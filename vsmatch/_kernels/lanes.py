@@ -134,10 +134,10 @@ def add_arm_in_lanes(typingctx, total, size, src, held, first_pass, lo, count, r
     within a vector (offset ``off`` = ``base`` less its ``lo``, -LANES < off < LANES),
     lanes ``max(0, -off) <= d < min(n, its count - off)`` with ``k <= reach.flat[reach_at +
     d]`` of its ``src`` and ``held`` (volumes of one shape, (H, W, depth): its candidates
-    from ``off`` on; ones with ``first_pass``) to ``total`` and ``size``: the same
-    additions in the same order as a call a neighbour, the sums kept in registers rather
-    than stored and loaded each time.
-    The caller makes sure each neighbour's vector lies inside ``src``."""
+    from ``off`` on; ones with ``first_pass``) to ``total`` and ``size``: the additions of
+    :func:`add_in_lanes` called once a neighbour, in the same order, with the sums kept in
+    registers rather than stored and loaded at each neighbour. The caller makes sure each
+    neighbour's vector lies inside ``src``."""
     _arrays(total=(total, types.float32), size=(size, types.float32),
             src=(src, types.float32), held=(held, types.float32), lo=(lo, types.int32),
             count=(count, types.int32), reach=(reach, types.uint8))
@@ -162,9 +162,9 @@ def add_arm_in_lanes(typingctx, total, size, src, held, first_pass, lo, count, r
         source = context.make_array(signature.args[2])(context, builder, args[2])
         depth = builder.extract_value(source.shape, 2)
 
-        def arm_loop(first_pass):
-            """The loop over k; ``first_pass``: each lane inside counts as one (``held``
-            is not read)."""
+        def arm_loop(counting):
+            """The loop over k; ``counting`` (the first pass): each lane inside counts as
+            one, ``held`` is not read."""
             with cgutils.for_range(builder, v.index(13)) as loop:
                 k = builder.add(loop.index, v.constant_index(1))
                 neighbour = builder.add(pixel, builder.mul(k, stride))
@@ -189,15 +189,15 @@ def add_arm_in_lanes(typingctx, total, size, src, held, first_pass, lo, count, r
                     at = builder.add(builder.mul(neighbour, depth), off)
                     added = builder.select(inside, v.load(2, at), zero)
                     builder.store(builder.fadd(builder.load(sums), added), sums)
-                    held_lanes = ones if first_pass else v.load(3, at)
+                    held_lanes = ones if counting else v.load(3, at)
                     builder.store(builder.fadd(builder.load(sizes),
                                                builder.select(inside, held_lanes, zero)),
                                   sizes)
 
-        with builder.if_else(first_pass) as (counting, summing):
-            with counting:
+        with builder.if_else(first_pass) as (in_first_pass, in_second_pass):
+            with in_first_pass:
                 arm_loop(True)
-            with summing:
+            with in_second_pass:
                 arm_loop(False)
         v.store(builder.load(sums), 0, origin)
         v.store(builder.load(sizes), 1, origin)
