@@ -223,18 +223,18 @@ def _row_walks(banded):
                 if direction == 1 and not banded:
                     prev_lo, prev_n, m = _walk_whole_write(
                         flat_cost, flat_out, depth, lo, count, change_l, change_r, padded, p1s,
-                        p2s,
-                        weight, y, x, y, ex, prev_lo, prev_n, m, paths, prev_at, cur_at, tmp)
+                        p2s, weight, y, x, y, ex, prev_lo, prev_n, m, paths, prev_at, cur_at,
+                        tmp)
                 elif banded:
                     prev_lo, prev_n, m = _walk_band_add(
                         flat_cost, flat_out, depth, lo, count, change_l, change_r, padded, p1s,
-                        p2s,
-                        weight, y, x, y, ex, prev_lo, prev_n, m, paths, prev_at, cur_at, tmp)
+                        p2s, weight, y, x, y, ex, prev_lo, prev_n, m, paths, prev_at, cur_at,
+                        tmp)
                 else:
                     prev_lo, prev_n, m = _walk_whole_add(
                         flat_cost, flat_out, depth, lo, count, change_l, change_r, padded, p1s,
-                        p2s,
-                        weight, y, x, y, ex, prev_lo, prev_n, m, paths, prev_at, cur_at, tmp)
+                        p2s, weight, y, x, y, ex, prev_lo, prev_n, m, paths, prev_at, cur_at,
+                        tmp)
 
     return walks
 
@@ -321,13 +321,13 @@ def _diagonal_walks(banded):
                 if banded:
                     prev_lo, prev_n, m = _walk_band_add(
                         flat_cost, flat_out, depth, lo, count, change_l, change_r, padded, p1s,
-                        p2s,
-                        weight, y, x, ey, ex, prev_lo, prev_n, m, paths, prev_at, cur_at, tmp)
+                        p2s, weight, y, x, ey, ex, prev_lo, prev_n, m, paths, prev_at, cur_at,
+                        tmp)
                 else:
                     prev_lo, prev_n, m = _walk_whole_add(
                         flat_cost, flat_out, depth, lo, count, change_l, change_r, padded, p1s,
-                        p2s,
-                        weight, y, x, ey, ex, prev_lo, prev_n, m, paths, prev_at, cur_at, tmp)
+                        p2s, weight, y, x, ey, ex, prev_lo, prev_n, m, paths, prev_at, cur_at,
+                        tmp)
 
     return walks
 
