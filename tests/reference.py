@@ -235,6 +235,42 @@ def fill(disp, labels, image, steps_y, steps_x, max_search):
             out[y, x] = best
     return out
 
+def plane_moments(disp, weight):
+    """The planes' moments of each pixel (H, W, 11) in float32: w (1, u, v, u^2, u v, v^2, d,
+    u d, v d, d^2) and 1, u and v from the image centre, w 0 where d is not finite."""
+    height, width = disp.shape
+    v, u = np.mgrid[0:height, 0:width].astype(np.float32)
+    u -= np.float32((width - 1) / 2.0)
+    v -= np.float32((height - 1) / 2.0)
+    ok = np.isfinite(disp) & (weight > 0)
+    w, d = weight.astype(np.float32), disp.astype(np.float32)
+    with np.errstate(invalid="ignore"):
+        moments = np.stack([w, w * u, w * v, w * u * u, w * u * v, w * v * v, w * d,
+                            w * u * d, w * v * d, w * d * d], axis=-1)
+    moments = np.where(ok[..., None], moments, np.float32(0))
+    return np.concatenate([moments, np.ones_like(moments[..., :1])], axis=-1)
+
+
+def _arm_sums(values, lo, hi, axis):
+    """Along ``axis``: the sum of ``values`` over i - lo .. i + hi, by running sums in
+    float64 (each added in turn), as float32."""
+    values = np.moveaxis(values, axis, 0).astype(np.float64)
+    sums = np.concatenate([np.zeros_like(values[:1]), np.cumsum(values, axis=0)])
+    i = np.arange(values.shape[0]).reshape((-1,) + (1,) * (values.ndim - 1))
+    lo = np.moveaxis(lo.astype(np.int64), axis, 0)[..., None]
+    hi = np.moveaxis(hi.astype(np.int64), axis, 0)[..., None]
+    out = (np.take_along_axis(sums, i + hi + 1, axis=0)
+           - np.take_along_axis(sums, i - lo, axis=0))
+    return np.moveaxis(out, 0, axis).astype(np.float32)
+
+
+def region_moment_sums(moments, arms):
+    """Each pixel's moments summed over its cross region: the horizontal arms (left,
+    right) of the pixels on its vertical arm (up, down); rows, then columns."""
+    rows = _arm_sums(moments, arms[0], arms[1], axis=1)
+    return _arm_sums(rows, arms[2], arms[3], axis=0)
+
+
 def plane_values(sums, min_weight, min_spread):
     """vsmatch._kernels.planes.plane_values a pixel at a time, its cases as branches."""
     height, width, _ = sums.shape

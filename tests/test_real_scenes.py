@@ -10,7 +10,7 @@ import pytest
 
 import vsmatch
 from vsmatch import confidence, datasets, evaluation, metrics, photometric, pipeline, planes
-from vsmatch._kernels.planes import N_MOMENTS, cut_arms_at_jumps, plane_moments, plane_values
+from vsmatch._kernels.planes import N_MOMENTS, cut_arms_at_jumps, fit_region_planes
 from vsmatch.config import load_config, config_from_dict
 from vsmatch.disparity import MISMATCHED, VALID
 from vsmatch.refinement import subpixel
@@ -91,39 +91,17 @@ def test_blend_lies_between_the_parabola_and_the_equiangular_fit():
 
 # --- planes ---------------------------------------------------------------------------------
 
-def test_plane_values_recover_an_exact_plane():
+def test_region_planes_recover_an_exact_plane():
     h, w = 30, 40
-    ys, xs = np.mgrid[0:h, 0:w].astype(np.float32)
+    ys, xs = np.mgrid[0:h, 0:w]
     disp = (0.25 * xs - 0.1 * ys + 12).astype(np.float32)
-    moments = np.empty((h, w, N_MOMENTS), np.float32)
-    plane_moments(disp, np.ones((h, w), np.float32), moments)
-    # One region holding the whole image: the means over it, at every pixel.
-    means = np.broadcast_to(moments.mean(axis=(0, 1)), moments.shape).copy()
+    # Every pixel's region the whole image.
+    arms = np.stack([xs, w - 1 - xs, ys, h - 1 - ys]).astype(np.uint8)
     out, spread = np.empty((h, w), np.float32), np.empty((h, w), np.float32)
-    plane_values(means, np.float32(0.2), np.float32(1.0), out, spread)
+    fit_region_planes(disp, np.ones((h, w), np.float32), arms, np.float32(0.2),
+                      np.float32(1.0), np.empty((h, w, N_MOMENTS), np.float32), out, spread)
     np.testing.assert_allclose(out, disp, atol=2e-3)
     assert spread.max() < 0.05
-
-
-def test_region_sums_add_each_cross_region_in_blocks_of_columns():
-    """Every pixel's sum over the horizontal arms of the pixels on its vertical arm, against
-    the sums written out; a width that is not a whole number of column blocks."""
-    from vsmatch._kernels.planes import COLUMN_BLOCK, region_sums
-    from vsmatch.aggregation import keep_arms_inside
-
-    rng = np.random.default_rng(5)
-    h, w = 23, 2 * COLUMN_BLOCK + 5
-    src = rng.random((h, w, 3)).astype(np.float32)
-    arms = rng.integers(0, 6, (4, h, w)).astype(np.uint8)
-    keep_arms_inside(arms)
-    scratch, out = np.empty_like(src), np.empty_like(src)
-    region_sums(src, arms, scratch, out)
-    want = np.zeros_like(src, dtype=np.float64)
-    for y in range(h):
-        for x in range(w):
-            for yy in range(y - arms[2, y, x], y + arms[3, y, x] + 1):
-                want[y, x] += src[yy, x - arms[0, yy, x]:x + arms[1, yy, x] + 1].sum(axis=0)
-    np.testing.assert_allclose(out, want, rtol=1e-5, atol=1e-5)
 
 
 def test_arms_stop_at_steps_between_neighbours_disparities():

@@ -99,26 +99,44 @@ def test_subpixel_matches_reference(rng):
                                reference.subpixel(disp, volume), rtol=1e-5, atol=1e-6)
 
 
-def test_plane_values_match_reference(rng):
-    """The planes' solve is written as selects so that it vectorises; it gives the values
-    of the pixel-at-a-time branches, empty, too light, one-axis and full regions alike."""
-    from vsmatch._kernels.planes import N_MOMENTS, plane_moments, plane_values, region_sums
+def test_region_planes_match_reference(rng):
+    """The planes' fit (moments, running sums along rows, then down blocks of columns, and
+    a solve written as selects so that it vectorises) gives the bytes of the moments
+    summed in NumPy and solved a pixel at a time with branches: empty, too light, one-axis
+    and full regions alike, a width that is not a whole number of column blocks."""
+    from vsmatch._kernels.planes import COLUMN_BLOCK, N_MOMENTS, fit_region_planes
+    from vsmatch.aggregation import keep_arms_inside
 
-    height, width = 23, 31
+    height, width = 23, 2 * COLUMN_BLOCK + 5
     disp = (rng.random((height, width)) * 40).astype(np.float32)
     disp[5, :] = np.nan
     weight = (rng.random((height, width)) < 0.7).astype(np.float32)
-    moments = np.empty((height, width, N_MOMENTS), np.float32)
-    plane_moments(disp, weight, moments)
     arms = rng.integers(0, 4, (4, height, width)).astype(np.uint8)
     arms[:, :, :10] = 0  # single pixels: no spread along either axis
     arms[0:2, 10:, 10:20] = 0  # columns only: a constant along u
-    from vsmatch.aggregation import keep_arms_inside
     keep_arms_inside(arms)
-    region_sums(moments, arms, np.empty_like(moments), moments)
     got = np.empty((height, width), np.float32), np.empty((height, width), np.float32)
-    plane_values(moments, np.float32(0.5), np.float32(1.0), *got)
-    want = reference.plane_values(moments, 0.5, 1.0)
+    fit_region_planes(disp, weight, arms, np.float32(0.5), np.float32(1.0),
+                      np.empty((height, width, N_MOMENTS), np.float32), *got)
+    sums = reference.region_moment_sums(reference.plane_moments(disp, weight), arms)
+    want = reference.plane_values(sums, 0.5, 1.0)
     for g, w in zip(got, want):
         assert g.tobytes() == w.tobytes()
     assert np.isnan(got[0]).any() and np.isfinite(got[0]).any()
+
+
+def test_reference_region_sums_add_each_cross_region(rng):
+    """The reference's running sums against each cross region's pixels added one by one."""
+    from vsmatch.aggregation import keep_arms_inside
+
+    h, w = 13, 17
+    src = rng.random((h, w, 3)).astype(np.float32)
+    arms = rng.integers(0, 6, (4, h, w)).astype(np.uint8)
+    keep_arms_inside(arms)
+    want = np.zeros_like(src, dtype=np.float64)
+    for y in range(h):
+        for x in range(w):
+            for yy in range(y - arms[2, y, x], y + arms[3, y, x] + 1):
+                want[y, x] += src[yy, x - arms[0, yy, x]:x + arms[1, yy, x] + 1].sum(axis=0)
+    np.testing.assert_allclose(reference.region_moment_sums(src, arms), want, rtol=1e-5,
+                               atol=1e-5)

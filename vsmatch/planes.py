@@ -6,8 +6,8 @@ rejected are filled along their row with a constant. Here each pixel's cross reg
 grown on the left view halved, as the band search's, longer than the aggregation's) gets the
 least-squares plane
 ``d = a x + b y + c`` through the pixels the check kept: the moments of those pixels are
-summed over the region with the aggregation's own kernels (a 9-channel "volume"), and the
-plane solved per pixel. Outliers leave the fit over a second pass. A rejected pixel takes
+summed over the region by running sums along the rows, then down the columns, where the
+plane is solved per pixel. Outliers leave the fit over a second pass. A rejected pixel takes
 its plane's value; a kept one takes it when within ``snap`` pixels (sub-pixel values from
 the plane rather than from a parabola through integer costs).
 """
@@ -18,8 +18,7 @@ import dataclasses
 
 import numpy as np
 
-from ._kernels.planes import (N_MOMENTS, cut_arms_at_jumps, plane_moments, plane_values,
-                              region_sums, take_planes)
+from ._kernels.planes import N_MOMENTS, cut_arms_at_jumps, fit_region_planes, take_planes
 from .aggregation import keep_arms_inside
 from .config import ArmsConfig, PlanesConfig
 from .disparity import VALID
@@ -32,7 +31,7 @@ MIN_SPREAD = 1.0
 
 
 #: Rows fitted at a time (with a margin of ``planes.l2`` rows on either side, which holds
-#: every region of the block's rows): it bounds the moments' memory (80 bytes a pixel).
+#: every region of the block's rows): it bounds the row sums' memory (44 bytes a pixel).
 #: A constant, so the result depends on the image and the config only.
 PLANE_ROWS = 512
 
@@ -77,17 +76,13 @@ def region_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, iteratio
     of the region); ``iterations`` fits, each on the kept pixels within ``inlier`` of the
     last plane."""
     weight = kept.astype(np.float32)
-    moments = np.empty(disp.shape + (N_MOMENTS,), np.float32)
-    scratch = np.empty_like(moments)
+    scratch = np.empty(disp.shape + (N_MOMENTS,), np.float32)
     plane = np.empty(disp.shape, np.float32)
     spread = np.empty(disp.shape, np.float32)
     for fit in range(iterations):
         if fit > 0:  # the next fit: the kept pixels near the last plane
             with np.errstate(invalid="ignore"):
                 weight = (kept & (np.abs(disp - plane) <= inlier)).astype(np.float32)
-        plane_moments(disp, weight, moments)
-        # The region sums go back into the moments' array (44 bytes a pixel less): its
-        # rows are all read into the row sums before the column pass writes a sum.
-        region_sums(moments, arms, scratch, moments)
-        plane_values(moments, np.float32(min_share), np.float32(MIN_SPREAD), plane, spread)
+        fit_region_planes(disp, weight, arms, np.float32(min_share), np.float32(MIN_SPREAD),
+                          scratch, plane, spread)
     return plane, spread

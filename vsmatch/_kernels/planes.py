@@ -23,90 +23,141 @@ def take_planes(disp, kept, plane, spread, max_spread, snap, fill, out):
             out[y, x] = p if take else d
 
 
-@njit(**KERNEL_OPTIONS)
-def plane_moments(disp, weight, out):
-    """``out[y, x]`` = w (1, u, v, u^2, u v, v^2, d, u d, v d) with u, v the pixel's
-    coordinates from the image centre, w = ``weight[y, x]`` (0 where the disparity is not
-    finite)."""
-    height, width = disp.shape
-    cx = np.float32((width - 1) / 2.0)
-    cy = np.float32((height - 1) / 2.0)
-    for y in prange(height):
-        v = np.float32(y) - cy
-        for x in range(width):
-            d = disp[y, x]
-            w = weight[y, x]
-            out[y, x, 10] = 1.0
-            if not np.isfinite(d) or w <= 0:
-                for k in range(10):
-                    out[y, x, k] = 0.0
-                continue
-            u = np.float32(x) - cx
-            out[y, x, 0] = w
-            out[y, x, 1] = w * u
-            out[y, x, 2] = w * v
-            out[y, x, 3] = w * u * u
-            out[y, x, 4] = w * u * v
-            out[y, x, 5] = w * v * v
-            out[y, x, 6] = w * d
-            out[y, x, 7] = w * u * d
-            out[y, x, 8] = w * v * d
-            out[y, x, 9] = w * d * d
+@njit(inline="always")
+def _pixel_moments(d, w, u, v, m):
+    """``m`` = the pixel's moments (:data:`N_MOMENTS`), in float32: w (1, u, v, u^2, u v,
+    v^2, d, u d, v d, d^2) and 1; w taken as 0 where ``d`` is not finite or w <= 0."""
+    m[10] = 1.0
+    if not np.isfinite(d) or w <= 0:
+        for k in range(10):
+            m[k] = 0.0
+        return
+    m[0] = w
+    m[1] = w * u
+    m[2] = w * v
+    m[3] = w * u * u
+    m[4] = w * u * v
+    m[5] = w * v * v
+    m[6] = w * d
+    m[7] = w * u * d
+    m[8] = w * v * d
+    m[9] = w * d * d
+
+
+@njit(inline="always")
+def _solve_plane(m, j, x, v0, cx, min_weight, min_spread):
+    """The plane through the region whose summed moments are row ``j`` of ``m``
+    (n, :data:`N_MOMENTS`), at pixel column ``x`` of a row ``v0`` from the centre: its
+    value and the spread of the region's disparities about it (NaN, NaN where it does not
+    fit). The cases are selects, not branches, so that a loop over ``j`` vectorises."""
+    w = m[j, 0]
+    # The threshold a float32 product, as the moments are float32.
+    fits = (w > 0) & (not (w < min_weight * np.float32(m[j, 10])))
+    mu = m[j, 1] / w
+    mv = m[j, 2] / w
+    md = m[j, 6] / w
+    suu = m[j, 3] / w - mu * mu
+    suv = m[j, 4] / w - mu * mv
+    svv = m[j, 5] / w - mv * mv
+    sud = m[j, 7] / w - mu * md
+    svd = m[j, 8] / w - mv * md
+    det = suu * svv - suv * suv
+    wide_u = suu >= min_spread
+    wide_v = svv >= min_spread
+    both = wide_u & wide_v & (det > 1e-6 * suu * svv)
+    a_both = (sud * svv - svd * suv) / det
+    b_both = (svd * suu - sud * suv) / det
+    a_u = sud / suu
+    b_v = svd / svv
+    a = a_both if both else (a_u if wide_u else 0.0)
+    b = b_both if both else (0.0 if wide_u else (b_v if wide_v else 0.0))
+    value = np.float32(md + a * ((x - cx) - mu) + b * (v0 - mv))
+    rest = m[j, 9] / w - md * md - a * sud - b * svd
+    rest = rest if rest > 0.0 else 0.0
+    nan = np.float32(np.nan)
+    return (value if fits else nan), (np.float32(np.sqrt(rest)) if fits else nan)
+
+
+#: Columns the column pass of :func:`fit_region_planes` runs along at once: their running sums
+#: side by side in memory (a column alone of the (H, W, C) rows is read with a stride of a
+#: whole row). 16 was fastest of 8 to 64 (13.0 -> 8.5 ms on a 942 x 489 image, 11 channels).
+COLUMN_BLOCK = 16
 
 
 @njit(**ROW_OPTIONS)
-def _plane_values_of_row(sums, min_weight, min_spread, out, spread, width, cx, cy, y):
-    """:func:`plane_values` of row ``y``."""
-    v0 = y - cy
-    m = np.empty((N_MOMENTS, width))
+def _row_moment_sums(disp, weight, arms, scratch, y):
+    """:func:`fit_region_planes`' row pass of row ``y``: each pixel's moments summed over its
+    horizontal arms (left, right) into ``scratch[y]``, by running sums in float64."""
+    height, width = disp.shape
+    # As float32, the centre the moments were always taken about.
+    cx = np.float32((width - 1) / 2.0)
+    cy = np.float32((height - 1) / 2.0)
+    v = np.float32(y) - cy
+    m = np.empty(N_MOMENTS, np.float32)
+    sums = np.empty((width + 1, N_MOMENTS))
+    sums[0, :] = 0.0
     for x in range(width):
+        _pixel_moments(disp[y, x], weight[y, x], np.float32(x) - cx, v, m)
         for k in range(N_MOMENTS):
-            m[k, x] = sums[y, x, k]
+            sums[x + 1, k] = sums[x, k] + m[k]
     for x in range(width):
-        w = m[0, x]
-        # The threshold a float32 product, as the moments are float32.
-        fits = (w > 0) & (not (w < min_weight * np.float32(m[10, x])))
-        mu = m[1, x] / w
-        mv = m[2, x] / w
-        md = m[6, x] / w
-        suu = m[3, x] / w - mu * mu
-        suv = m[4, x] / w - mu * mv
-        svv = m[5, x] / w - mv * mv
-        sud = m[7, x] / w - mu * md
-        svd = m[8, x] / w - mv * md
-        det = suu * svv - suv * suv
-        wide_u = suu >= min_spread
-        wide_v = svv >= min_spread
-        both = wide_u & wide_v & (det > 1e-6 * suu * svv)
-        a_both = (sud * svv - svd * suv) / det
-        b_both = (svd * suu - sud * suv) / det
-        a_u = sud / suu
-        b_v = svd / svv
-        a = a_both if both else (a_u if wide_u else 0.0)
-        b = b_both if both else (0.0 if wide_u else (b_v if wide_v else 0.0))
-        value = np.float32(md + a * ((x - cx) - mu) + b * (v0 - mv))
-        rest = m[9, x] / w - md * md - a * sud - b * svd
-        rest = rest if rest > 0.0 else 0.0
-        out[y, x] = value if fits else np.float32(np.nan)
-        spread[y, x] = np.float32(np.sqrt(rest)) if fits else np.float32(np.nan)
+        lo = x - np.int64(arms[0, y, x])
+        hi = x + np.int64(arms[1, y, x]) + 1
+        for k in range(N_MOMENTS):
+            scratch[y, x, k] = sums[hi, k] - sums[lo, k]
+
+
+@njit(**ROW_OPTIONS)
+def _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread, block):
+    """:func:`fit_region_planes`' column pass of columns ``block`` * :data:`COLUMN_BLOCK`
+    on: the row sums (``scratch``) summed over each pixel's vertical arms (up, down), by
+    running sums in float64 side by side in memory, and each pixel's plane solved."""
+    height, width, _ = scratch.shape
+    cx = (width - 1) / 2.0
+    cy = (height - 1) / 2.0
+    x0 = block * COLUMN_BLOCK
+    n = min(width, x0 + COLUMN_BLOCK) - x0
+    sums = np.empty((height + 1, n, N_MOMENTS))
+    sums[0] = 0.0
+    for y in range(height):
+        for j in range(n):
+            for k in range(N_MOMENTS):
+                sums[y + 1, j, k] = sums[y, j, k] + scratch[y, x0 + j, k]
+    # A row's region sums, a pixel a line (the solve's loop over them vectorises).
+    m = np.empty((COLUMN_BLOCK, N_MOMENTS))
+    for y in range(height):
+        for j in range(n):
+            lo = y - np.int64(arms[2, y, x0 + j])
+            hi = y + np.int64(arms[3, y, x0 + j]) + 1
+            for k in range(N_MOMENTS):
+                # Through float32, as the sums were kept before the solve.
+                m[j, k] = np.float32(sums[hi, j, k] - sums[lo, j, k])
+        v0 = y - cy
+        for j in range(n):
+            value, off = _solve_plane(m, j, x0 + j, v0, cx, min_weight, min_spread)
+            plane[y, x0 + j] = value
+            spread[y, x0 + j] = off
 
 
 @njit(**KERNEL_OPTIONS)
-def plane_values(sums, min_weight, min_spread, out, spread):
-    """The least-squares plane d = a u + b v + c through each pixel's support region
-    (``sums``: the moments summed over it), evaluated at the pixel, and the standard
-    deviation of the region's disparities about it (``spread``); NaN where the region's
-    weight is below ``min_weight`` of its pixels. Where its pixels do not span a plane (the
-    variance along u or v below ``min_spread``) a constant is fitted along that axis.
+def fit_region_planes(disp, weight, arms, min_weight, min_spread, scratch, plane, spread):
+    """The least-squares plane d = a u + b v + c through each pixel's cross region (the
+    horizontal arms (left, right) of the pixels on its vertical arm (up, down)), weighted
+    by ``weight`` (0 where ``disp`` is not finite), evaluated at the pixel (``plane``), and
+    the standard deviation of the region's disparities about it (``spread``); NaN where the
+    region's weight is below ``min_weight`` of its pixels. Where its pixels do not span a
+    plane (the variance along u or v below ``min_spread``) a constant is fitted along that
+    axis. u, v are the pixel's coordinates from the image centre.
 
-    A row's moments are laid out a moment a line first, and each pixel's cases are
-    selects, not branches: the loop over x vectorises (1.7x faster, the same values)."""
-    height, width, _ = sums.shape
-    cx = (width - 1) / 2.0
-    cy = (height - 1) / 2.0
+    The region's moments (:data:`N_MOMENTS`) are summed by running sums along each row
+    into ``scratch`` (H, W, N_MOMENTS), then down each column :data:`COLUMN_BLOCK` columns
+    at a time, and solved there: no volume of moments or of their sums is stored."""
+    height, width = disp.shape
     for y in prange(height):
-        _plane_values_of_row(sums, min_weight, min_spread, out, spread, width, cx, cy,
-                             np.int64(y))
+        _row_moment_sums(disp, weight, arms, scratch, np.int64(y))
+    for block in prange((width + COLUMN_BLOCK - 1) // COLUMN_BLOCK):
+        _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread,
+                             np.int64(block))
 
 
 @njit(inline="always")
@@ -166,53 +217,3 @@ def cut_arms_at_jumps(arms, disp, jump):
         _cut_row_arms(arms, disp, jump, np.int64(y))
     for x in prange(width):
         _cut_column_arms(arms, disp, jump, np.int64(x))
-
-
-@njit(inline="always")
-def _line_sums(values, lo_arms, hi_arms, out):
-    """``out[i]`` = the sum of ``values`` (n, C) over i - lo_arms[i] .. i + hi_arms[i],
-    by running sums in float64."""
-    length, channels = values.shape
-    sums = np.empty((length + 1, channels))
-    sums[0, :] = 0.0
-    for i in range(length):
-        for k in range(channels):
-            sums[i + 1, k] = sums[i, k] + values[i, k]
-    for i in range(length):
-        lo = i - np.int64(lo_arms[i])
-        hi = i + np.int64(hi_arms[i]) + 1
-        for k in range(channels):
-            out[i, k] = sums[hi, k] - sums[lo, k]
-
-
-#: Columns the column pass of :func:`region_sums` runs along at once: their running sums
-#: side by side in memory (a column alone of the (H, W, C) rows is read with a stride of a
-#: whole row). 16 was fastest of 8 to 64 (13.0 -> 8.5 ms on a 942 x 489 image, 11 channels).
-COLUMN_BLOCK = 16
-
-
-@njit(**KERNEL_OPTIONS)
-def region_sums(src, arms, scratch, out):
-    """``out[y, x]`` = the sum of ``src`` (H, W, C) over pixel (y, x)'s cross region: the
-    horizontal arms (left, right) of the pixels on its vertical arm (up, down). Each row,
-    then each column of the row sums (``scratch``), :data:`COLUMN_BLOCK` columns at a time,
-    each by running sums in float64 (the same sums, in the same order, as one at a time).
-    ``out`` may be ``src``: every row is summed into ``scratch`` before a sum is written."""
-    height, width, channels = src.shape
-    for y in prange(height):
-        _line_sums(src[y], arms[0, y], arms[1, y], scratch[y])
-    for block in prange((width + COLUMN_BLOCK - 1) // COLUMN_BLOCK):
-        x0 = block * COLUMN_BLOCK
-        n = min(width, x0 + COLUMN_BLOCK) - x0
-        sums = np.empty((height + 1, n, channels))
-        sums[0] = 0.0
-        for y in range(height):
-            for j in range(n):
-                for k in range(channels):
-                    sums[y + 1, j, k] = sums[y, j, k] + scratch[y, x0 + j, k]
-        for y in range(height):
-            for j in range(n):
-                lo = y - np.int64(arms[2, y, x0 + j])
-                hi = y + np.int64(arms[3, y, x0 + j]) + 1
-                for k in range(channels):
-                    out[y, x0 + j, k] = sums[hi, j, k] - sums[lo, j, k]
