@@ -337,6 +337,20 @@ def test_a_shadow_is_dark_against_the_views_own_median():
     assert not uniform.any()
 
 
+def test_a_shadow_reaches_its_own_edge():
+    """Where the box is several cells wide, its mean reaches that far into a shadow from the
+    light around it: a cell dark with its neighbours within that reach is in the shadow too,
+    so the shadow's edge lies within a cell (8 px) of the dark region's, and no further out."""
+    from vsmatch.surfaces import in_shadow
+
+    rng = np.random.default_rng(0)
+    view = np.clip(rng.normal(150, 20, (480, 640)), 0, 255)
+    view[240:, :160] *= 0.12
+    shadow = in_shadow(view.astype(np.uint8), 3, 0.35, 16)
+    assert shadow[244:, :156].all()
+    assert not shadow[:232].any() and not shadow[:, 168:].any()
+
+
 def test_an_unsure_block_in_a_shadow_keeps_its_own_match(pair):
     """The unsure wrong block of the first test, its surroundings in the left view in deep
     shadow: with surfaces.shadow it keeps its match (the shadow's pixels are not unsure),

@@ -256,17 +256,24 @@ def view_contrast(view: np.ndarray) -> float:
 def in_shadow(view: np.ndarray, levels: int, share: float, window: int) -> np.ndarray:
     """Where ``view`` lies in a shadow: its mean grey level over a box of 1/``window`` of
     the view's width (on the view reduced ``levels`` times) below ``share`` of the view's
-    median. A view dark all over has no shadow: its median is dark too."""
+    median, or, within the box's reach of such a place, over a cell and its neighbours. A
+    view dark all over has no shadow: its median is dark too."""
     grey = grey_levels(view)
     median = max(1.0, float(np.median(grey)))
     reduced = grey.astype(np.float32)
     for _ in range(levels):
         reduced = cv2.pyrDown(reduced)
     side = max(3, reduced.shape[1] // window) | 1
-    light = cv2.blur(reduced, (side, side), borderType=cv2.BORDER_REFLECT)
+    level = np.float32(share * median)
+    dimmed = cv2.blur(reduced, (side, side), borderType=cv2.BORDER_REFLECT) / level
+    # The box reaches half its side into a shadow from the light around it: within that
+    # reach of a shadow, a cell dark with its neighbours (3 x 3 cells) is in it too.
+    near = cv2.dilate((dimmed < 1.0).astype(np.uint8), np.ones((side, side), np.uint8))
+    own = cv2.blur(reduced, (3, 3), borderType=cv2.BORDER_REFLECT) / level
+    dimmed = np.where(near > 0, np.minimum(dimmed, own), dimmed)
     # Its share of the level, at most 1, brought to full size: a shadow's edge cells reach
     # half a cell further out than a comparison on the cells would.
-    dimmed = np.minimum(light / np.float32(share * median), np.float32(1.0))
+    dimmed = np.minimum(dimmed, np.float32(1.0))
     return cv2.resize(dimmed, view.shape[1::-1], interpolation=cv2.INTER_LINEAR) < 1.0
 
 
