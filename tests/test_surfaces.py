@@ -318,15 +318,20 @@ def test_bridges_kernel_equals_the_numpy_steps_along_columns_and_rows():
     assert drawn > 1000  # the cases hold bridges, not only NaN
 
 
+def _dark_corner(height, width):
+    """A bright noisy view (mean 150) whose lower half's left quarter is at 0.12 of it."""
+    view = np.clip(np.random.default_rng(0).normal(150, 20, (height, width)), 0, 255)
+    view[height // 2:, :width // 4] *= 0.12
+    return view
+
+
 def test_a_shadow_is_dark_against_the_views_own_median():
     """in_shadow: a quarter of a bright view at 0.12 of its light is a shadow (but for a
     box's reach into it from its edge), the rest is not; the same view dark all over keeps
     its shadow (0.12 of a darker median) and gains none; a view dark all over, no shadow."""
     from vsmatch.surfaces import in_shadow
 
-    rng = np.random.default_rng(0)
-    view = np.clip(rng.normal(150, 20, (240, 320)), 0, 255)
-    view[120:, :80] *= 0.12
+    view = _dark_corner(240, 320)
     bright = in_shadow(view.astype(np.uint8), 3, 0.35, 16)
     assert bright[140:, :60].all()
     assert not bright[:100].any() and not bright[:, 100:].any()
@@ -343,10 +348,7 @@ def test_a_shadow_reaches_its_own_edge():
     so the shadow's edge lies within a cell (8 px) of the dark region's, and no further out."""
     from vsmatch.surfaces import in_shadow
 
-    rng = np.random.default_rng(0)
-    view = np.clip(rng.normal(150, 20, (480, 640)), 0, 255)
-    view[240:, :160] *= 0.12
-    shadow = in_shadow(view.astype(np.uint8), 3, 0.35, 16)
+    shadow = in_shadow(_dark_corner(480, 640).astype(np.uint8), 3, 0.35, 16)
     assert shadow[244:, :156].all()
     assert not shadow[:232].any() and not shadow[:, 168:].any()
 
