@@ -3,8 +3,8 @@ from numba import njit, prange
 
 from . import KERNEL_OPTIONS, ROW_OPTIONS, SERIAL_OPTIONS
 
-#: Channels of the moments volume: weight, then weight times u, v, u^2, u v, v^2, d, u d, v d,
-#: d^2, and 1 (summed over a region: its pixel count).
+#: The moments a plane's fit sums over a region: weight, then weight times u, v, u^2, u v,
+#: v^2, d, u d, v d, d^2, and 1 (summed over a region: its pixel count).
 N_MOMENTS = 11
 
 
