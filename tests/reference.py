@@ -235,6 +235,7 @@ def fill(disp, labels, image, steps_y, steps_x, max_search):
             out[y, x] = best
     return out
 
+
 def plane_moments(disp, weight):
     """The planes' moments of each pixel (H, W, 11) in float32: w (1, u, v, u^2, u v, v^2, d,
     u d, v d, d^2) and 1, u and v from the image centre, w 0 where d is not finite."""
@@ -272,7 +273,8 @@ def region_moment_sums(moments, arms):
 
 
 def plane_values(sums, min_weight, min_spread):
-    """vsmatch._kernels.planes.plane_values a pixel at a time, its cases as branches."""
+    """The solve of vsmatch._kernels.planes.fit_region_planes from the summed moments
+    ``sums``, a pixel at a time, its cases as branches."""
     height, width, _ = sums.shape
     cx, cy = (width - 1) / 2.0, (height - 1) / 2.0
     out = np.full((height, width), np.nan, np.float32)
