@@ -112,3 +112,19 @@ def test_shrinking_threshold_shortens_arms_on_a_ramp():
         cfg = ArmsConfig(tau1=16, tau2=16, tau3=16, l1=39, l2=40, shrink=shrink)
         lengths[shrink] = aggregation.cross_arms(ramp, theta, grad, cfg)[1, 2, 50]  # right arm
     assert lengths == {False: 15, True: 11}
+
+
+@pytest.mark.parametrize("side", [0, 1, 2, 3])
+def test_arms_past_the_edge_are_refused(rng, side):
+    """An arm past the view's edge would be read past the running sums' ends: named."""
+    h, w, n = 6, 9, 5
+    volume = rng.random((h, w, n), dtype=np.float32)
+    arms = np.ones((4, h, w), np.uint8)
+    aggregation.keep_arms_inside(arms)
+    aggregation.aggregate_cross(volume.copy(), arms, arms.copy(), iterations=1)  # inside
+    reaching = arms.copy()
+    y, x = ((3, 0), (3, w - 1), (0, 4), (h - 1, 4))[side]
+    reaching[side, y, x] = 1
+    name = ("left", "right", "up", "down")[side]
+    with pytest.raises(ValueError, match=f"right view's {name} arms reach past"):
+        aggregation.aggregate_cross(volume.copy(), arms, reaching, iterations=1)

@@ -40,16 +40,30 @@ def cross_arms(image: np.ndarray, theta: np.ndarray | None, sensitivity: np.ndar
     return out
 
 
+def _room(arms: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The pixels each arm of ``arms`` (4, H, W) has before the array's edge (at most
+    255), in the order left, right, up, down, shaped to broadcast against an arm."""
+    height, width = arms.shape[1:]
+    room = np.minimum(np.arange(max(height, width)), 255).astype(np.uint8)
+    return (room[:width], room[:width][::-1], room[:height, None], room[:height][::-1, None])
+
+
 def keep_arms_inside(arms: np.ndarray) -> np.ndarray:
     """``arms`` (4, H, W) cut, in place, to the pixels the array has on each side (arms
     made elsewhere, or of a block of rows, may reach past its edge); returned."""
-    height, width = arms.shape[1:]
-    room = np.minimum(np.arange(max(height, width)), 255).astype(np.uint8)
-    np.minimum(arms[LEFT], room[:width], out=arms[LEFT])
-    np.minimum(arms[RIGHT], room[:width][::-1], out=arms[RIGHT])
-    np.minimum(arms[UP], room[:height, None], out=arms[UP])
-    np.minimum(arms[DOWN], room[:height][::-1, None], out=arms[DOWN])
+    for side, room in zip((LEFT, RIGHT, UP, DOWN), _room(arms)):
+        np.minimum(arms[side], room, out=arms[side])
     return arms
+
+
+def _check_arms_inside(arms: np.ndarray, view: str) -> None:
+    """Refuse arms that reach past the view's edge: the kernels read the running sums and
+    the neighbours at the arms' ends unchecked."""
+    for side, room in zip((LEFT, RIGHT, UP, DOWN), _room(arms)):
+        if np.any(arms[side] > room):
+            name = ("left", "right", "up", "down")[side]
+            raise ValueError(f"aggregation: the {view} view's {name} arms reach past its "
+                             f"edge (cut them with keep_arms_inside)")
 
 
 #: How the sums over the arms are taken in the full search: "running" sums, the orthogonal
@@ -80,6 +94,8 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
     if method not in AGGREGATION_METHODS:
         raise ValueError(f"aggregation method must be one of {AGGREGATION_METHODS}, "
                          f"got {method!r}")
+    _check_arms_inside(arms_l, "left")
+    _check_arms_inside(arms_r, "right")
     current = np.ascontiguousarray(volume, dtype=np.float32)
     # One scratch volume: the first pass of each iteration writes it, the second writes
     # the result back over ``current``, so aggregation holds two volumes at most.
