@@ -4,35 +4,59 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS, ROW_OPTIONS, SERIAL_OPTIONS
 
 
-@njit(**KERNEL_OPTIONS)
-def box_mean(volume, box, rows_at, columns_at, out):
-    """The mean of each (H, W, D) volume slice over ``box`` x ``box`` windows, as
-    ``cv2.blur`` takes it, in float64 sums: per output row the window's rows are added over
-    the whole row, then the window slides along it. ``rows_at[y + k]`` and
-    ``columns_at[x + k]`` are the rows and columns the window's k-th line reads (the
-    borders mirrored)."""
+#: Rows of a volume that :func:`box_mean` slides one window sum down (a band's first row
+#: sums its window afresh): fixed, so the sums do not depend on the threads; few, so a
+#: small view's rows still make a job for every core.
+BOX_BAND_ROWS = 8
+
+
+@njit(**ROW_OPTIONS)
+def _box_mean_of_band(volume, box, rows_at, columns_at, out, band):
+    """:func:`box_mean` of the rows of band ``band``."""
     height, width, depth = volume.shape
+    first, stop = band * BOX_BAND_ROWS, min(height, (band + 1) * BOX_BAND_ROWS)
     scale = 1.0 / (box * box)
-    for y in prange(height):
-        rows = np.zeros((width, depth))
-        for k in range(box):
-            src = volume[rows_at[y + k]]
+    rows = np.zeros((width, depth))  # each column's sums over the window's rows
+    for k in range(box):
+        src = volume[rows_at[first + k]]
+        for x in range(width):
+            for d in range(depth):
+                rows[x, d] += src[x, d]
+    window = np.empty(depth)
+    for y in range(first, stop):
+        if y > first:
+            enter = volume[rows_at[y + box - 1]]
+            leave = volume[rows_at[y - 1]]
             for x in range(width):
                 for d in range(depth):
-                    rows[x, d] += src[x, d]
-        window = np.zeros(depth)
+                    rows[x, d] += np.float64(enter[x, d]) - np.float64(leave[x, d])
+        window[:] = 0.0
         for k in range(box):
             column = rows[columns_at[k]]
             for d in range(depth):
                 window[d] += column[d]
         for x in range(width):
             if x > 0:
-                enter = rows[columns_at[x + box - 1]]
-                leave = rows[columns_at[x - 1]]
+                enter_x = rows[columns_at[x + box - 1]]
+                leave_x = rows[columns_at[x - 1]]
                 for d in range(depth):
-                    window[d] += enter[d] - leave[d]
+                    window[d] += enter_x[d] - leave_x[d]
             for d in range(depth):
                 out[y, x, d] = window[d] * scale
+
+
+@njit(**KERNEL_OPTIONS)
+def box_mean(volume, box, rows_at, columns_at, out):
+    """The mean of each (H, W, D) volume slice over ``box`` x ``box`` windows, as
+    ``cv2.blur`` takes it, in float64 sums: down bands of :data:`BOX_BAND_ROWS` rows the
+    window's rows are summed once and then slid (a row in, a row out), and along each row
+    the window slides. ``rows_at[y + k]`` and ``columns_at[x + k]`` are the rows and
+    columns the window's k-th line reads (the borders mirrored). Summed afresh for every
+    row, with its sums allocated a row at a time, the quick first match's blur gained 1.4x
+    from 1 thread to 2."""
+    bands = (volume.shape[0] + BOX_BAND_ROWS - 1) // BOX_BAND_ROWS
+    for band in prange(bands):
+        _box_mean_of_band(volume, box, rows_at, columns_at, out, np.int64(band))
 
 
 #: Rows of a plane that :func:`plane_box_mean` slides one window sum down (a band's first
