@@ -128,3 +128,14 @@ def test_arms_past_the_edge_are_refused(rng, side):
     name = ("left", "right", "up", "down")[side]
     with pytest.raises(ValueError, match=f"right view's {name} arms reach past"):
         aggregation.aggregate_cross(volume.copy(), arms, reaching, iterations=1)
+
+
+def test_a_line_too_long_for_the_running_sums_is_refused():
+    """The running sums' offsets are 32-bit: a line whose sums would pass them is named
+    before any work (a view-sized array stands in for the huge volume)."""
+    volume = np.lib.stride_tricks.as_strided(np.zeros(1, np.float32), (1, 2 ** 21, 512),
+                                             (0, 0, 0))
+    arms = np.zeros((4, 1, 2 ** 21), np.uint8)
+    with pytest.raises(ValueError, match="too long for the running sums"):
+        aggregation.aggregate_cross(volume, arms, arms, iterations=1,
+                                    scratch=np.empty((1, 1, 1), np.float32))

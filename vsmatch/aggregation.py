@@ -94,6 +94,13 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
     if method not in AGGREGATION_METHODS:
         raise ValueError(f"aggregation method must be one of {AGGREGATION_METHODS}, "
                          f"got {method!r}")
+    if (bands is None or bands.is_full) and method == "running":
+        # The running sums are read at 32-bit offsets: a line of (sum, size) pairs must fit.
+        line = max(volume.shape[:2]) + 1
+        if 2 * line * volume.shape[2] >= 2 ** 31:
+            raise ValueError(f"aggregation: a line of {line - 1} pixels x "
+                             f"{volume.shape[2]} candidates is too long for the running "
+                             f"sums; use method='direct' or smaller stripes")
     _check_arms_inside(arms_l, "left")
     _check_arms_inside(arms_r, "right")
     current = np.ascontiguousarray(volume, dtype=np.float32)
@@ -122,6 +129,7 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
                           bands.count, none, none, thread_classes(), out)
         else:
             sum_along_arms(src, arms_l, arms_r_rev, along_rows, normalise, out)
+
 
     for it in range(iterations):
         rows_first = it % 2 == 0
