@@ -130,7 +130,6 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
         else:
             sum_along_arms(src, arms_l, arms_r_rev, along_rows, normalise, out)
 
-
     for it in range(iterations):
         rows_first = it % 2 == 0
         one_pass(current, rows_first, False, scratch)

@@ -169,7 +169,7 @@ def _region_ends(i, a_lo, a_hi, r_lo, r_hi, n_disp, cell, ends_lo, ends_hi):
 
     Unsigned, so indexing takes no wrap-around branch (the ends are never negative), and
     worked out in a vector loop before the sums are read: the read then costs two loads a
-    candidate (the rows pass 1.45-1.8x faster than with the ends worked out as it reads).
+    candidate (the row pass 1.45-1.65x faster than with the ends worked out as it reads).
     """
     base = np.int32(i * n_disp)
     for d in range(n_disp):
