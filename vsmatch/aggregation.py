@@ -94,7 +94,9 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
     if method not in AGGREGATION_METHODS:
         raise ValueError(f"aggregation method must be one of {AGGREGATION_METHODS}, "
                          f"got {method!r}")
-    if (bands is None or bands.is_full) and method == "running":
+    bands = of(volume, bands)
+    narrow = not bands.is_full
+    if not narrow and method == "running":
         # The running sums are read at 32-bit offsets: a line of (sum, size) pairs must fit.
         line = max(volume.shape[:2]) + 1
         if 2 * line * volume.shape[2] >= 2 ** 31:
@@ -108,8 +110,6 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
     # the result back over ``current``, so aggregation holds two volumes at most.
     if scratch is None:
         scratch = np.empty_like(current)
-    bands = of(current, bands)
-    narrow = not bands.is_full
     # No right pixel: no limit; LANES more, read past a band's end.
     arms_r_rev = mirrored(arms_r, pad=bands.n_disp + LANES, fill=255)
     # Narrow bands differ from pixel to pixel: the regions' sizes are counted.

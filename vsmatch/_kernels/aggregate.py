@@ -193,16 +193,14 @@ def _sum_line(src, arms_l, arms_r_rev, along_rows, normalise, line, out):
     # Running sums in float64: a float32 sum over a long line would lose the low bits
     # that separate close costs.
     if not normalise:
-        sums = np.empty((length + 1) * n_disp)
-        for d in range(n_disp):
-            sums[d] = 0.0
+        sums = np.empty((length + 1, n_disp))
+        sums[0, :] = 0.0
         for i in range(length):
             y = line * along_rows + i * (1 - along_rows)
             x = i * along_rows + line * (1 - along_rows)
-            here = src[y, x]
-            at = i * n_disp
             for d in range(n_disp):
-                sums[at + n_disp + d] = sums[at + d] + here[d]
+                sums[i + 1, d] = sums[i, d] + src[y, x, d]
+        flat = sums.reshape(-1)
         for i in range(length):
             y = line * along_rows + i * (1 - along_rows)
             x = i * along_rows + line * (1 - along_rows)
@@ -211,7 +209,7 @@ def _sum_line(src, arms_l, arms_r_rev, along_rows, normalise, line, out):
             _region_ends(i, a_lo, a_hi, r_lo, r_hi, n_disp, 1, ends_lo, ends_hi)
             result = out[y, x]
             for d in range(n_disp):
-                result[d] = sums[ends_hi[d]] - sums[ends_lo[d]]
+                result[d] = flat[ends_hi[d]] - flat[ends_lo[d]]
         return
     # The region sizes' running sums beside the costs', (sum, size) pairs: the two
     # values a difference reads lie in one cache line (the column pass 26 % faster
