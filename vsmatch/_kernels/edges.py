@@ -4,7 +4,8 @@ from numba import njit, prange
 from . import KERNEL_OPTIONS, ROW_OPTIONS
 from .rows import dealt
 
-#: Most candidates a pixel weighs: its own disparity and one from each side.
+#: Most candidates a pixel weighs: its own disparity and one from each side (the sums of
+#: the window below are written out for three).
 MAX_CANDIDATES = 3
 
 
@@ -25,7 +26,8 @@ def _edge_sides_of_row(disp, left, right, grad_l, grad_r, skip, radius, colour_s
     shifts = np.empty(MAX_CANDIDATES, np.int64)
     fractions = np.empty(MAX_CANDIDATES, np.float64)
     weights_row = np.empty(2 * radius + 1, np.float64)
-    costs_row = np.empty((MAX_CANDIDATES, 2 * radius + 1), np.float64)
+    # Zeroed once: the rows past a pixel's candidates are summed too (see below), never read.
+    costs_row = np.zeros((MAX_CANDIDATES, 2 * radius + 1), np.float64)
     for x in range(width):
         own = disp[y, x]
         out[y, x] = own
@@ -55,8 +57,8 @@ def _edge_sides_of_row(disp, left, right, grad_l, grad_r, skip, radius, colour_s
         first = max(x - radius, 0, np.int64(np.ceil(nearest)))
         last = min(x + radius, width - 1, np.int64(np.floor(farthest + width - 1)))
         span = last + 1 - first
+        totals[:] = 0.0
         for c in range(count):
-            totals[c] = 0.0
             # qx - candidate is exact in float64: its whole part moves with qx, its
             # fraction is the same over the window.
             whole = np.floor(-candidates[c])
@@ -70,42 +72,59 @@ def _edge_sides_of_row(disp, left, right, grad_l, grad_r, skip, radius, colour_s
             # A window row's weights and costs at once, in loops that vectorise (the
             # channels written out), then summed in the window's order.
             ady = dy if dy >= 0 else -dy
-            for j in range(span):
-                qx = first + j
-                similar = 0
-                for ch in range(channels):
-                    similar += abs(np.int64(left[ch, y, x]) - np.int64(left[ch, qy, qx]))
-                dx = qx - x
-                weights_row[j] = (by_colour[similar]
-                                  * by_distance[(dx if dx >= 0 else -dx) + ady])
+            # Unsigned indexes: Numba tests a signed one for a negative value (a branch
+            # in every look-up, which stops LLVM vectorising the loops).
+            ufirst = np.uint64(first)
+            uy, uqy = np.uint64(y), np.uint64(qy)
+            ux = np.uint64(x)
+            uspan = np.uint64(span)
+            for j in range(uspan):
+                qx = ufirst + j
+                if channels == 3:  # written out, as below
+                    similar = (abs(np.int64(left[0, uy, ux]) - np.int64(left[0, uqy, qx]))
+                               + abs(np.int64(left[1, uy, ux]) - np.int64(left[1, uqy, qx]))
+                               + abs(np.int64(left[2, uy, ux]) - np.int64(left[2, uqy, qx])))
+                else:
+                    similar = 0
+                    for ch in range(channels):
+                        similar += abs(np.int64(left[ch, uy, ux]) - np.int64(left[ch, uqy, qx]))
+                dx = np.int64(qx) - x
+                weights_row[j] = (by_colour[np.uint64(similar)]
+                                  * by_distance[np.uint64((dx if dx >= 0 else -dx) + ady)])
             for c in range(count):
                 f = fractions[c]
                 g = 1.0 - f
-                at = first + shifts[c]  # the right column left of the first's match
-                for j in range(span):
-                    qx = first + j
-                    x0 = at + j
+                uat = np.uint64(first + shifts[c])  # the right column left of the first's match
+                for j in range(uspan):
+                    qx = ufirst + j
+                    x0 = uat + j
+                    x1 = x0 + np.uint64(1)
                     if channels == 3:
-                        colour = abs(np.float64(left[0, qy, qx])
-                                     - (g * right[0, qy, x0] + f * right[0, qy, x0 + 1]))
-                        colour += abs(np.float64(left[1, qy, qx])
-                                      - (g * right[1, qy, x0] + f * right[1, qy, x0 + 1]))
-                        colour += abs(np.float64(left[2, qy, qx])
-                                      - (g * right[2, qy, x0] + f * right[2, qy, x0 + 1]))
+                        colour = abs(np.float64(left[0, uqy, qx])
+                                     - (g * right[0, uqy, x0] + f * right[0, uqy, x1]))
+                        colour += abs(np.float64(left[1, uqy, qx])
+                                      - (g * right[1, uqy, x0] + f * right[1, uqy, x1]))
+                        colour += abs(np.float64(left[2, uqy, qx])
+                                      - (g * right[2, uqy, x0] + f * right[2, uqy, x1]))
                     else:
                         colour = 0.0
                         for ch in range(channels):
-                            colour += abs(np.float64(left[ch, qy, qx]) - (
-                                g * right[ch, qy, x0] + f * right[ch, qy, x0 + 1]))
+                            colour += abs(np.float64(left[ch, uqy, qx]) - (
+                                g * right[ch, uqy, x0] + f * right[ch, uqy, x1]))
                     colour = _capped(colour / channels, colour_cap)
-                    shown_grad = g * grad_r[qy, x0] + f * grad_r[qy, x0 + 1]
-                    gradient = _capped(abs(grad_l[qy, qx] - shown_grad), gradient_cap)
+                    shown_grad = g * grad_r[uqy, x0] + f * grad_r[uqy, x1]
+                    gradient = _capped(abs(grad_l[uqy, qx] - shown_grad), gradient_cap)
                     costs_row[c, j] = weights_row[j] * ((1.0 - gradient_share) * colour
                                                         + gradient_share * gradient)
+            # In the window's order, as scalars: each sum's chain stays in a register (an
+            # array's element went through memory at each add), all MAX_CANDIDATES of them.
+            w_sum, t0, t1, t2 = weights, totals[0], totals[1], totals[2]
             for j in range(span):
-                weights += weights_row[j]
-                for c in range(count):
-                    totals[c] += costs_row[c, j]
+                w_sum += weights_row[j]
+                t0 += costs_row[0, j]
+                t1 += costs_row[1, j]
+                t2 += costs_row[2, j]
+            weights, totals[0], totals[1], totals[2] = w_sum, t0, t1, t2
         if weights <= 0:
             continue
         best = own
