@@ -35,22 +35,28 @@ def _region_vote_of_row(disp, labels, votes, run_end, arms, n_disp, min_votes, m
                 continue
             hist[:] = 0
             total = 0
-            for yy in range(y - np.int64(arms[UP, y, x]), y + np.int64(arms[DOWN, y, x]) + 1):
-                xx = x - np.int64(arms[LEFT, yy, x])
-                stop = x + np.int64(arms[RIGHT, yy, x]) + 1
+            # Unsigned indexes: Numba tests a signed one for a negative value, a branch in
+            # every look-up.
+            for yy in range(np.uint64(y - np.int64(arms[UP, y, x])),
+                            np.uint64(y + np.int64(arms[DOWN, y, x]) + 1)):
+                xx = np.uint64(x - np.int64(arms[LEFT, yy, x]))
+                stop = np.uint64(x + np.int64(arms[RIGHT, yy, x]) + 1)
                 while xx < stop:
-                    end = min(np.int64(run_end[yy, xx]), stop)
+                    end = min(np.uint64(run_end[yy, xx]), stop)
                     vote = votes[yy, xx]
                     if vote >= 0:
-                        hist[vote] += end - xx
-                        total += end - xx
+                        hist[np.uint64(vote)] += np.int64(end - xx)
+                        total += np.int64(end - xx)
                     xx = end
             if total <= min_votes:
                 continue
-            best = 0
+            # The first of the largest counts: the largest first, in a loop that vectorises.
+            most = hist[0]
             for d in range(1, n_disp):
-                if hist[d] > hist[best]:
-                    best = d
+                most = hist[d] if hist[d] > most else most
+            best = 0
+            while hist[best] != most:
+                best += 1
             if hist[best] > min_share * total:
                 out_disp[y, x] = best
                 out_labels[y, x] = VALID
