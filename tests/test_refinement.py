@@ -7,9 +7,11 @@ from vsmatch.config import DiscontinuityConfig, ScanlineConfig, VotingConfig
 import reference
 
 
-@pytest.mark.parametrize("directions, h, w", [(4, 7, 9), (8, 7, 9), (8, 11, 6), (4, 5, 21)])
-def test_scanline_matches_reference(rng, directions, h, w):
-    n = 5
+# Depths below a vector, whole vectors and vectors with a last one part-filled.
+@pytest.mark.parametrize("directions, h, w, n", [(4, 7, 9, 5), (8, 7, 9, 5), (8, 11, 6, 5),
+                                                 (4, 5, 21, 5), (4, 6, 10, 16), (4, 6, 10, 13),
+                                                 (8, 5, 9, 21)])
+def test_scanline_matches_reference(rng, directions, h, w, n):
     cost = rng.random((h, w, n), dtype=np.float32) * 2
     left = rng.integers(0, 40, size=(h, w, 3), dtype=np.uint8)
     right = rng.integers(0, 40, size=(h, w, 3), dtype=np.uint8)
