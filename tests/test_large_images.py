@@ -335,34 +335,57 @@ def test_confidence_in_row_blocks_is_the_same_bytes(teddy, monkeypatch):
 
 
 def test_the_scanline_kernels_load_from_the_cache_in_a_new_process(tmp_path):
-    """Each scanline kernel is a closure compiled per flag (whole range or bands); its
-    on-disk cache must key the same way in every process, or every run would compile the
-    kernels again (seconds each). A second process with the same cache compiles nothing."""
+    """Each scanline kernel and loop body is a closure compiled per flag (whole range or
+    bands); its on-disk cache must key the same way in every process, or every run would
+    compile the kernels again (seconds each), and those compiled by different processes (as
+    the compilation ahead does) must work together in one: Numba names compiled code by its
+    function's name and a counter of the compiling process, so two closures of one name
+    could clash (the band kernel once ran the whole range's walks so; each now has a name
+    of its own). One process compiles the whole range's kernels, another the bands'; a
+    third runs both from the cache, compiling nothing, and the bands' sums are the whole
+    range's with the costs outside the bands infinite."""
     import subprocess
     import sys
 
     script = (
+        "import sys\n"
         "import numpy as np\n"
         "from numba.core import event\n"
         "from vsmatch import optimization\n"
         "from vsmatch.bands import Bands\n"
         "from vsmatch.config import load_config\n"
         "rng = np.random.default_rng(0)\n"
-        "volume = rng.random((6, 9, 8), dtype=np.float32)\n"
+        "full = rng.random((6, 9, 12), dtype=np.float32)\n"
+        "lo = rng.integers(0, 4, size=(6, 9)).astype(np.int32)\n"
+        "count = np.full((6, 9), 9, np.int32)\n"
+        "inside = np.arange(12) - lo[..., None]\n"
+        "inside = (inside >= 0) & (inside < 9)\n"
+        "banded = np.stack([full[y, x, lo[y, x]:lo[y, x] + 9] for y in range(6)\n"
+        "                   for x in range(9)]).reshape(6, 9, 9)\n"
         "view = rng.integers(0, 40, size=(6, 9, 3), dtype=np.uint8)\n"
-        "band = Bands(np.ones((6, 9), np.int32), np.full((6, 9), 5, np.int32), 8, 12)\n"
         "cfg = load_config(None).scanline\n"
+        "what = sys.argv[1]\n"
         "with event.install_recorder('numba:compile') as rec:\n"
-        "    optimization.scanline_optimise(volume, view, view, cfg)\n"
-        "    optimization.scanline_optimise(volume, view, view, cfg, bands=band)\n"
+        "    if what in ('whole', 'both'):\n"
+        "        want = optimization.scanline_optimise(np.where(inside, full, np.inf)\n"
+        "                                              .astype(np.float32), view, view, cfg)\n"
+        "    if what in ('bands', 'both'):\n"
+        "        got = optimization.scanline_optimise(banded, view, view, cfg,\n"
+        "                                             bands=Bands(lo, count, 9, 12))\n"
+        "if what == 'both':\n"
+        "    for y in range(6):\n"
+        "        for x in range(9):\n"
+        "            assert np.allclose(got[y, x], want[y, x, lo[y, x]:lo[y, x] + 9]), (y, x)\n"
         "names = {e.data['dispatcher'].py_func.__qualname__ for _, e in rec.buffer}\n"
-        "print(sorted(n for n in names if n.startswith('_')))\n")
+        "print(sorted(n for n in names if 'rows' in n or 'columns' in n or 'walks' in n))\n")
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
 
-    def compiled():
-        return subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
-                              text=True, check=True).stdout.strip()
+    def compiled(what):
+        return subprocess.run([sys.executable, "-c", script, what], env=env,
+                              capture_output=True, text=True, check=True).stdout.strip()
 
-    first = compiled()
-    assert "_row_kernel.<locals>.rows" in first and "_column_kernel.<locals>.columns" in first
-    assert compiled() == "[]"
+    whole = compiled("whole")
+    assert "whole_rows" in whole and "whole_columns" in whole
+    bands = compiled("bands")
+    assert "band_rows" in bands and "band_columns" in bands
+    assert compiled("both") == "[]"

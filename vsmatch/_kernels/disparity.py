@@ -6,6 +6,7 @@ from .rows import dealt
 from .arms import colour_distance
 from .confidence import curve_at
 from .lanes import LANES, argmin_chunks
+from .views import borrowed
 
 VALID, OCCLUDED, MISMATCHED = 0, 1, 2
 
@@ -47,12 +48,17 @@ def winner_takes_all(volume, lo, count, out):
 
 @njit(**ROW_OPTIONS)
 def _both_of_row(volume, lo, count, out_l, out_r, exclude, out_best, out_second, out_mean,
-                 n_disp, y):
-    """:func:`winner_takes_all_both` of row ``y`` (``n_disp``: past every band's end)."""
+                 n_disp, y, best_r, best_rd):
+    """:func:`winner_takes_all_both` of row ``y`` (``n_disp``: past every band's end);
+    ``best_r``, ``best_rd``: the right pixels' least costs and their disparities so far,
+    ``width + n_disp`` each, infinite and :data:`NO_DISPARITY`."""
+    volume, lo, count, out_l, out_r = borrowed(volume), borrowed(lo), borrowed(count), \
+        borrowed(out_l), borrowed(out_r)
+    out_best, out_second, out_mean = borrowed(out_best), borrowed(out_second), \
+        borrowed(out_mean)
+    best_r, best_rd = borrowed(best_r), borrowed(best_rd)
     width = volume.shape[1]
     curve = out_best.shape[0] > 0
-    best_r = np.full(width + n_disp, np.inf, dtype=volume.dtype)
-    best_rd = np.full(width + n_disp, NO_DISPARITY, dtype=np.int32)
     # Reversed: right pixel xr is at width - 1 - xr, so x - d lies forward in memory.
     for x in range(width):
         costs = volume[y, x]
@@ -114,8 +120,10 @@ def winner_takes_all_both(volume, lo, count, out_l, out_r, exclude, out_best, ou
                 count_max = max(count_max, np.int64(count[y, x]))
     n_disp = lo_max + count_max
     for y in prange(height):
+        best_r = np.full(width + n_disp, np.inf, dtype=volume.dtype)
+        best_rd = np.full(width + n_disp, NO_DISPARITY, dtype=np.int32)
         _both_of_row(volume, lo, count, out_l, out_r, exclude, out_best, out_second, out_mean,
-                     n_disp, np.int64(y))
+                     n_disp, np.int64(y), best_r, best_rd)
 
 
 @njit(**KERNEL_OPTIONS)

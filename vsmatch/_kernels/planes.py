@@ -2,6 +2,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import KERNEL_OPTIONS, ROW_OPTIONS, SERIAL_OPTIONS
+from .views import borrowed
 
 #: The moments a plane's fit sums over a region: weight, then weight times u, v, u^2, u v,
 #: v^2, d, u d, v d, d^2, and 1 (summed over a region: its pixel count).
@@ -85,16 +86,18 @@ COLUMN_BLOCK = 16
 
 
 @njit(**ROW_OPTIONS)
-def _row_moment_sums(disp, weight, arms, scratch, y):
+def _row_moment_sums(disp, weight, arms, scratch, y, m, sums):
     """:func:`fit_region_planes`' row pass of row ``y``: each pixel's moments summed over its
-    horizontal arms (left, right) into ``scratch[y]``, by running sums in float64."""
+    horizontal arms (left, right) into ``scratch[y]``, by running sums in float64 (``m``: a
+    pixel's moments, ``sums``: (W + 1, :data:`N_MOMENTS`), room for them)."""
+    disp, weight, arms, scratch = borrowed(disp), borrowed(weight), borrowed(arms), \
+        borrowed(scratch)
+    m, sums = borrowed(m), borrowed(sums)
     height, width = disp.shape
     # As float32, the centre the moments were always taken about.
     cx = np.float32((width - 1) / 2.0)
     cy = np.float32((height - 1) / 2.0)
     v = np.float32(y) - cy
-    m = np.empty(N_MOMENTS, np.float32)
-    sums = np.empty((width + 1, N_MOMENTS))
     sums[0, :] = 0.0
     for x in range(width):
         _pixel_moments(disp[y, x], weight[y, x], np.float32(x) - cx, v, m)
@@ -108,23 +111,27 @@ def _row_moment_sums(disp, weight, arms, scratch, y):
 
 
 @njit(**ROW_OPTIONS)
-def _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread, block):
+def _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread, block, sums,
+                         m):
     """:func:`fit_region_planes`' column pass of columns ``block`` * :data:`COLUMN_BLOCK`
     on: the row sums (``scratch``) summed over each pixel's vertical arms (up, down), by
-    running sums in float64 side by side in memory, and each pixel's plane solved."""
+    running sums in float64 side by side in memory (``sums``: (H + 1, the block's columns,
+    :data:`N_MOMENTS`), room for them), and each pixel's plane solved (``m``:
+    (:data:`COLUMN_BLOCK`, :data:`N_MOMENTS`), a row's region sums)."""
+    scratch, arms, plane, spread = borrowed(scratch), borrowed(arms), borrowed(plane), \
+        borrowed(spread)
+    sums, m = borrowed(sums), borrowed(m)
     height, width, _ = scratch.shape
     cx = (width - 1) / 2.0
     cy = (height - 1) / 2.0
     x0 = block * COLUMN_BLOCK
     n = min(width, x0 + COLUMN_BLOCK) - x0
-    sums = np.empty((height + 1, n, N_MOMENTS))
     sums[0] = 0.0
     for y in range(height):
         for j in range(n):
             for k in range(N_MOMENTS):
                 sums[y + 1, j, k] = sums[y, j, k] + scratch[y, x0 + j, k]
     # A row's region sums, a pixel a line (the solve's loop over them vectorises).
-    m = np.empty((COLUMN_BLOCK, N_MOMENTS))
     for y in range(height):
         for j in range(n):
             lo = y - np.int64(arms[2, y, x0 + j])
@@ -154,10 +161,15 @@ def fit_region_planes(disp, weight, arms, min_weight, min_spread, scratch, plane
     at a time, and solved there: no volume of moments or of their sums is stored."""
     height, width = disp.shape
     for y in prange(height):
-        _row_moment_sums(disp, weight, arms, scratch, np.int64(y))
+        m = np.empty(N_MOMENTS, np.float32)
+        sums = np.empty((width + 1, N_MOMENTS))
+        _row_moment_sums(disp, weight, arms, scratch, np.int64(y), m, sums)
     for block in prange((width + COLUMN_BLOCK - 1) // COLUMN_BLOCK):
+        n = min(width, (block + 1) * COLUMN_BLOCK) - block * COLUMN_BLOCK
+        sums = np.empty((height + 1, n, N_MOMENTS))
+        m = np.empty((COLUMN_BLOCK, N_MOMENTS))
         _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread,
-                             np.int64(block))
+                             np.int64(block), sums, m)
 
 
 @njit(inline="always")

@@ -3,6 +3,7 @@ from numba import njit, prange
 
 from . import KERNEL_OPTIONS, ROW_OPTIONS
 from .lanes import LANES, path_step_chunks_add, path_step_chunks_write, path_step_lanes
+from .views import borrowed
 
 # Path costs live in one flat array per walk (``paths``), each pixel's LANES or depth + 2
 # of them from a flat index, and the volumes are read by flat index too: a view of a row
@@ -184,24 +185,28 @@ _walk_whole_add = _walk_steps(False, False)
 _walk_band_add = _walk_steps(True, False)
 
 
-def _walks_options(banded):
-    """A kernel's loop body: the whole range's walks a function of their own (the kernel
-    compiles in 1-1.5 s less), the bands' inline in the loop (as a function they ran 25-40 %
-    slower on a stream's frames)."""
-    return dict(inline="always") if banded else ROW_OPTIONS
+def _compiled(function, name, banded, options):
+    """``function`` compiled with ``options`` under a name of its own, the band version's
+    or the whole range's. Numba names compiled code after the function's qualified name and
+    a counter of the process that compiled it: two closures of one name cached by
+    different processes clash when both are loaded (the band kernel ran the whole range's
+    walks)."""
+    function.__name__ = function.__qualname__ = f"{'band' if banded else 'whole'}_{name}"
+    return njit(**options)(function)
 
 
 def _row_walks(banded):
     """Both walks along row ``y``, for bands or for the whole range: a kernel's loop body."""
 
-    @njit(**_walks_options(banded))
-    def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, y, out):
+    def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, y, out, paths, tmp):
+        """``paths``: two pixels' path costs, ``2 * (depth + 2)`` infinite, used in turn as
+        previous and current; ``tmp``: ``depth + 2`` for the rebase."""
         width, depth = cost.shape[1], np.int64(cost.shape[2])
-        flat_cost, flat_out = cost.reshape(-1), out.reshape(-1)
-        change_r, padded = change_r_rev.reshape(-1), change_r_rev.shape[1]
-        # Two pixels' path costs, used in turn as previous and current.
-        paths = np.full(2 * (depth + 2), np.inf, dtype=np.float32)
-        tmp = np.empty(depth + 2, dtype=np.float32)
+        flat_cost, flat_out = borrowed(cost.reshape(-1)), borrowed(out.reshape(-1))
+        change_r, padded = borrowed(change_r_rev.reshape(-1)), change_r_rev.shape[1]
+        lo, count, change_l = borrowed(lo), borrowed(count), borrowed(change_l)
+        p1s, p2s, paths, tmp = borrowed(p1s), borrowed(p2s), borrowed(paths), borrowed(tmp)
+        out = borrowed(out)
         prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
         if banded:
             out[y] = np.float32(0.0)
@@ -236,25 +241,25 @@ def _row_walks(banded):
                         p2s, weight, y, x, y, ex, prev_lo, prev_n, m, paths, prev_at, cur_at,
                         tmp)
 
-    return walks
+    return _compiled(walks, "row_walks", banded, ROW_OPTIONS)
 
 
 def _column_walks(banded):
     """Both walks down columns ``x0 .. x0 + n - 1`` side by side: a kernel's loop body."""
 
-    @njit(**_walks_options(banded))
-    def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, x0, n, out):
+    def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, x0, n, out, paths,
+              tmp, prev_lo, prev_n, mins):
+        """``paths``: each column's path costs, ``depth + 2`` a column, in two halves used
+        in turn as the previous row's and the current one's (``2 * n * (depth + 2)``,
+        infinite); ``tmp``: ``depth + 2``; ``prev_lo``, ``prev_n``, ``mins``: the columns'
+        last bands and minima (``n`` each, ``prev_lo`` and ``mins`` zero)."""
         height, depth = cost.shape[0], np.int64(cost.shape[2])
-        flat_cost, flat_out = cost.reshape(-1), out.reshape(-1)
-        change_r, padded = change_r_rev.reshape(-1), change_r_rev.shape[1]
-        # Each column's path costs, ``depth + 2`` a column, in two halves used in turn as
-        # the previous row's and the current one's.
+        flat_cost, flat_out = borrowed(cost.reshape(-1)), borrowed(out.reshape(-1))
+        change_r, padded = borrowed(change_r_rev.reshape(-1)), change_r_rev.shape[1]
+        lo, count, change_l = borrowed(lo), borrowed(count), borrowed(change_l)
+        p1s, p2s, paths, tmp = borrowed(p1s), borrowed(p2s), borrowed(paths), borrowed(tmp)
+        prev_lo, prev_n, mins = borrowed(prev_lo), borrowed(prev_n), borrowed(mins)
         line = depth + 2
-        paths = np.full(2 * n * line, np.inf, dtype=np.float32)
-        tmp = np.empty(depth + 2, dtype=np.float32)
-        prev_lo = np.zeros(n, dtype=np.int64)
-        prev_n = np.empty(n, dtype=np.int64)
-        mins = np.zeros(n, dtype=np.float32)
         half = 0  # the previous row's half
         for direction in (1, -1):
             prev_n[:] = -1
@@ -280,19 +285,22 @@ def _column_walks(banded):
                             mins[k], paths, prev_at, cur_at, tmp)
                 half = 1 - half
 
-    return walks
+    return _compiled(walks, "column_walks", banded, ROW_OPTIONS)
 
 
 def _diagonal_walks(banded):
     """Both walks along diagonal ``line`` (see :func:`scanline_diagonal_pass`): a kernel's
     loop body."""
 
-    @njit(**_walks_options(banded))
-    def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, step_x, weight, line, out):
+    def walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, step_x, weight, line, out,
+              paths, tmp):
+        """``paths``, ``tmp``: as the row walks'."""
         height, width = cost.shape[0], cost.shape[1]
         depth = np.int64(cost.shape[2])
-        flat_cost, flat_out = cost.reshape(-1), out.reshape(-1)
-        change_r, padded = change_r_rev.reshape(-1), change_r_rev.shape[1]
+        flat_cost, flat_out = borrowed(cost.reshape(-1)), borrowed(out.reshape(-1))
+        change_r, padded = borrowed(change_r_rev.reshape(-1)), change_r_rev.shape[1]
+        lo, count, change_l = borrowed(lo), borrowed(count), borrowed(change_l)
+        p1s, p2s, paths, tmp = borrowed(p1s), borrowed(p2s), borrowed(paths), borrowed(tmp)
         # Line starts on the top row, then down the first column (last for step_x = -1).
         if line < width:
             y0, x0 = 0, line if step_x == 1 else width - 1 - line
@@ -300,8 +308,6 @@ def _diagonal_walks(banded):
             y0, x0 = line - width + 1, 0 if step_x == 1 else width - 1
         room_x = width - 1 - x0 if step_x == 1 else x0
         length = min(height - y0, room_x + 1)
-        paths = np.full(2 * (depth + 2), np.inf, dtype=np.float32)
-        tmp = np.empty(depth + 2, dtype=np.float32)
         prev_lo, prev_n, m = np.int64(0), np.int64(-1), np.float32(0.0)
         for direction in (1, -1):
             start = 0 if direction == 1 else length - 1
@@ -329,7 +335,7 @@ def _diagonal_walks(banded):
                         p2s, weight, y, x, ey, ex, prev_lo, prev_n, m, paths, prev_at, cur_at,
                         tmp)
 
-    return walks
+    return _compiled(walks, "diagonal_walks", banded, ROW_OPTIONS)
 
 
 # Module globals, as the steps: a kernel's closure holds only its ``banded`` flag.
@@ -341,55 +347,64 @@ _whole_diagonal_walks, _band_diagonal_walks = _diagonal_walks(False), _diagonal_
 def _row_kernel(banded):
     """:func:`scanline_rows`' kernel for bands or for the whole range."""
 
-    @njit(**KERNEL_OPTIONS)
     def rows(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, out):
+        depth = cost.shape[2]
         for y in prange(cost.shape[0]):
+            paths = np.full(2 * (depth + 2), np.inf, dtype=np.float32)
+            tmp = np.empty(depth + 2, dtype=np.float32)
             if banded:
                 _band_row_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                                np.int64(y), out)
+                                np.int64(y), out, paths, tmp)
             else:
                 _whole_row_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                                 np.int64(y), out)
+                                 np.int64(y), out, paths, tmp)
 
-    return rows
+    return _compiled(rows, "rows", banded, KERNEL_OPTIONS)
 
 
 def _column_kernel(banded):
     """:func:`scanline_columns`' kernel for bands or for the whole range."""
 
-    @njit(**KERNEL_OPTIONS)
     def columns(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, chunk, out):
         width = cost.shape[1]
         n_chunks = (width + chunk - 1) // chunk
+        depth = cost.shape[2]
         for c in prange(n_chunks):
             x0 = c * chunk
             n = min(width, x0 + chunk) - x0
+            paths = np.full(2 * n * (depth + 2), np.inf, dtype=np.float32)
+            tmp = np.empty(depth + 2, dtype=np.float32)
+            prev_lo = np.zeros(n, dtype=np.int64)
+            prev_n = np.empty(n, dtype=np.int64)
+            mins = np.zeros(n, dtype=np.float32)
             if banded:
                 _band_column_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight,
-                                   x0, n, out)
+                                   x0, n, out, paths, tmp, prev_lo, prev_n, mins)
             else:
                 _whole_column_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s,
-                                    weight, x0, n, out)
+                                    weight, x0, n, out, paths, tmp, prev_lo, prev_n, mins)
 
-    return columns
+    return _compiled(columns, "columns", banded, KERNEL_OPTIONS)
 
 
 def _diagonal_kernel(banded):
     """:func:`scanline_diagonal_pass`' kernel for bands or for the whole range."""
 
-    @njit(**KERNEL_OPTIONS)
     def diagonal(cost, lo, count, change_l, change_r_rev, p1s, p2s, step_x, weight, out):
         n_lines = cost.shape[0] + cost.shape[1] - 1
+        depth = cost.shape[2]
         for index in prange(n_lines):
             line = np.int64(index)  # prange's index may be unsigned: keep the sums signed
+            paths = np.full(2 * (depth + 2), np.inf, dtype=np.float32)
+            tmp = np.empty(depth + 2, dtype=np.float32)
             if banded:
                 _band_diagonal_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s,
-                                     step_x, weight, line, out)
+                                     step_x, weight, line, out, paths, tmp)
             else:
                 _whole_diagonal_walks(cost, lo, count, change_l, change_r_rev, p1s, p2s,
-                                      step_x, weight, line, out)
+                                      step_x, weight, line, out, paths, tmp)
 
-    return diagonal
+    return _compiled(diagonal, "diagonal", banded, KERNEL_OPTIONS)
 
 
 #: One pixel's path costs over a band in a volume LANES deep: LANES, and an end either side.
