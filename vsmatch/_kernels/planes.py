@@ -116,8 +116,8 @@ def _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread, b
     """:func:`fit_region_planes`' column pass of columns ``block`` * :data:`COLUMN_BLOCK`
     on: the row sums (``scratch``) summed over each pixel's vertical arms (up, down), by
     running sums in float64 side by side in memory (``sums``: (H + 1, the block's columns,
-    :data:`N_MOMENTS`), room for them), and each pixel's plane solved (``m``:
-    (:data:`COLUMN_BLOCK`, :data:`N_MOMENTS`), a row's region sums)."""
+    :data:`N_MOMENTS`), room for them: its shape gives the block's width), and each pixel's
+    plane solved (``m``: (:data:`COLUMN_BLOCK`, :data:`N_MOMENTS`), a row's region sums)."""
     scratch, arms, plane, spread = borrowed(scratch), borrowed(arms), borrowed(plane), \
         borrowed(spread)
     sums, m = borrowed(sums), borrowed(m)
@@ -125,7 +125,7 @@ def _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread, b
     cx = (width - 1) / 2.0
     cy = (height - 1) / 2.0
     x0 = block * COLUMN_BLOCK
-    n = min(width, x0 + COLUMN_BLOCK) - x0
+    n = sums.shape[1]
     sums[0] = 0.0
     for y in range(height):
         for j in range(n):
