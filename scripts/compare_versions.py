@@ -47,6 +47,13 @@ def import_revision(rev: str, folder: Path):
         else:
             tar.extractall(folder)
     (folder / "vsmatch").rename(folder / OTHER)
+    # Revisions before 2026-12-02 read their data files (bundled configs, weights) from the
+    # package named "vsmatch", which is this one: pointed at their own.
+    for module in (folder / OTHER).glob("*.py"):
+        text = module.read_text()
+        if 'resources.files("vsmatch")' in text:
+            module.write_text(text.replace('resources.files("vsmatch")',
+                                           "resources.files(__package__)"))
     sys.path.insert(0, str(folder))
     return (importlib.import_module(f"{OTHER}.pipeline"),
             importlib.import_module(f"{OTHER}.volumes"))

@@ -39,6 +39,8 @@ def test_yaml_file_merges_over_defaults(tmp_path):
     ({"cost": {"lambda_census": "x"}}, r"must be a number"),
     ({"cost": {"census_width": 8}}, r"must be odd"),
     ({"cost": {"census_width": 11}}, r"at most 64 neighbours"),
+    ({"bands": {"census_width": 8}}, r"bands.census_width and bands.census_height must be odd"),
+    ({"bands": {"census_width": 11}}, r"bands.census_width x bands.census_height .* at most 64"),
     ({"cost": 3}, r"section 'cost' must be a mapping"),
 ])
 def test_bad_values_are_refused_naming_the_key(data, message):

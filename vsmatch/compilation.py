@@ -131,7 +131,7 @@ def _compile_share(share: list[tuple[str, list[str]]]) -> None:
 def load_record() -> dict:
     """``kernel_signatures.json``: ``{"configs": {name: {kernel: [signature, ...]}},
     "seconds": {kernel: compile seconds}}`` (read once; not to be changed)."""
-    text = (resources.files("vsmatch") / SIGNATURES_FILE).read_text()
+    text = (resources.files(__package__) / SIGNATURES_FILE).read_text()
     return json.loads(text)
 
 
@@ -298,7 +298,7 @@ def main(argv: list[str]) -> int:
     if argv[0] == "--print":
         print(text, end="")
         return 0
-    path = resources.files("vsmatch") / SIGNATURES_FILE
+    path = resources.files(__package__) / SIGNATURES_FILE
     with open(str(path), "w") as fh:
         fh.write(text)
     total = sum(record["seconds"].values())

@@ -252,7 +252,7 @@ def model_weights() -> np.ndarray:
     """The fitted model as the upper-triangular matrix of its quadratic form over
     :data:`FEATURES` (float32, ``(n, n)``), from the named terms of
     ``confidence_weights.json`` (:func:`term_names`)."""
-    text = (resources.files("vsmatch") / "confidence_weights.json").read_text()
+    text = (resources.files(__package__) / "confidence_weights.json").read_text()
     stored = json.loads(text)["terms"]
     return weights_matrix([stored[name] for name in term_names()])
 

@@ -365,6 +365,18 @@ class BandsConfig:
         "Where the 3 × 3 range is cut: around the estimate of the coarse neighbour whose grey "
         "level is nearest the pixel's, the pixel's own unless another is nearer by more than "
         "this (grey levels); null: always its own."))
+    census_width: int | None = _param(None, 1, 15, nullable=True, doc=(
+        "Census window width (odd) at the finer levels; null: cost.census_width."))
+    census_height: int | None = _param(None, 1, 15, nullable=True, doc=(
+        "Census window height (odd) at the finer levels; null: cost.census_height."))
+
+    def cost_at_bands(self, cost: CostConfig) -> CostConfig:
+        """The ``cost`` section as the finer levels take it: their census window."""
+        width = cost.census_width if self.census_width is None else self.census_width
+        height = cost.census_height if self.census_height is None else self.census_height
+        if (width, height) == (cost.census_width, cost.census_height):
+            return cost
+        return dataclasses.replace(cost, census_width=width, census_height=height)
 
 
 @dataclass(frozen=True)
@@ -635,12 +647,13 @@ def _check_cross_constraints(cfg: Config) -> None:
     if 0 < cfg.noise.arms_l2 <= cfg.arms.l1:
         raise ConfigError(f"config value noise.arms_l2 = {cfg.noise.arms_l2} must be 0 or more "
                           f"than arms.l1 = {cfg.arms.l1}")
-    c = cfg.cost
-    if c.census_width % 2 == 0 or c.census_height % 2 == 0:
-        raise ConfigError("config values cost.census_width and cost.census_height must be odd")
-    if c.census_width * c.census_height - 1 > 64:
-        raise ConfigError("config values cost.census_width x cost.census_height must give at most "
-                          "64 neighbours (one uint64 per pixel)")
+    for section, c in (("cost", cfg.cost), ("bands", cfg.bands.cost_at_bands(cfg.cost))):
+        if c.census_width % 2 == 0 or c.census_height % 2 == 0:
+            raise ConfigError(f"config values {section}.census_width and "
+                              f"{section}.census_height must be odd")
+        if c.census_width * c.census_height - 1 > 64:
+            raise ConfigError(f"config values {section}.census_width x {section}.census_height "
+                              "must give at most 64 neighbours (one uint64 per pixel)")
 
 
 def config_from_dict(data: dict[str, Any] | None, base: Config | None = None) -> Config:
@@ -716,7 +729,7 @@ def _moved_keys_read(data: dict[str, Any]) -> dict[str, Any]:
 
 def bundled_config_names() -> list[str]:
     """Names of the configs shipped with the package (``paper``, ``census``, ...)."""
-    folder = resources.files("vsmatch") / "configs"
+    folder = resources.files(__package__) / "configs"
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".yaml"))
 
 
@@ -800,7 +813,7 @@ def _config_from_data(data: Any, origin: str) -> Config:
 
 def _read_config_text(name_or_path: str) -> tuple[str, str]:
     if name_or_path in bundled_config_names():
-        res = resources.files("vsmatch") / "configs" / f"{name_or_path}.yaml"
+        res = resources.files(__package__) / "configs" / f"{name_or_path}.yaml"
         return res.read_text(encoding="utf-8"), f"'{name_or_path}'"
     path = Path(name_or_path)
     if not path.is_file():

@@ -74,15 +74,17 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
             left = sensitivity.presmooth(left, cfg.cost.presmooth_sigma)
             right = sensitivity.presmooth(right, cfg.cost.presmooth_sigma)
 
+    finer = bands is not None and not bands.is_full  # a finer level: the bands' options
+    cost_cfg = cfg.bands.cost_at_bands(cfg.cost) if finer else cfg.cost
     with stage("cost"):
         volume, (grad_l, theta_l), (grad_r, theta_r) = matching_costs(
-            left, right, n_disp, cfg.cost, direction=cfg.arms.kappa != 0, bands=bands,
+            left, right, n_disp, cost_cfg, direction=cfg.arms.kappa != 0, bands=bands,
             colour_weight=learnt.colour_weight)
 
     arms_cfg = cfg.arms
     scanline = cfg.scanline.enabled
     aggregate = cfg.aggregation.iterations > 0
-    if bands is not None and not bands.is_full:  # the finer levels' options
+    if finer:
         scanline = scanline and cfg.bands.scanline
         aggregate = aggregate and cfg.bands.aggregation
         support = cfg.bands.support
