@@ -8,19 +8,54 @@ from . import KERNEL_OPTIONS, ROW_OPTIONS
 def _census_of_row(padded, half_w, half_h, band, out, y):
     """:func:`census_transform` of row ``y``."""
     width = out.shape[1]
+    window_w = 2 * half_w + 1
+    count = (2 * half_h + 1) * window_w
     bits = np.zeros(width, dtype=np.uint64)
     centre = np.empty(width, dtype=np.float32)
     centre_row = padded[y + half_h, half_w:half_w + width]
     for x in range(width):
         centre[x] = centre_row[x] - band
-    for dy in range(-half_h, half_h + 1):
-        row = padded[y + half_h + dy]
-        for dx in range(-half_w, half_w + 1):
-            if dy == 0 and dx == 0:
-                continue
-            neighbour = row[half_w + dx:half_w + dx + width]
+    # The neighbours in row-major order, eight a pass over the row, the rest one a pass:
+    # the bits are loaded and stored once for eight comparisons (one neighbour a pass, a
+    # 9 x 7 window moved them through the cache 62 times; the kernel 1.4-1.7x slower).
+    rows = np.empty(8, np.int64)
+    firsts = np.empty(8, np.int64)
+    k = 0
+    while k < count:
+        taken = 0
+        while taken < 8 and k < count:
+            dy, dx = k // window_w, k % window_w
+            if not (dy == half_h and dx == half_w):
+                rows[taken] = y + dy
+                firsts[taken] = dx
+                taken += 1
+            k += 1
+        if taken == 8:
+            # Slices that start at the neighbour: indexes Numba knows are >= 0.
+            n0 = padded[rows[0], firsts[0]:firsts[0] + width]
+            n1 = padded[rows[1], firsts[1]:firsts[1] + width]
+            n2 = padded[rows[2], firsts[2]:firsts[2] + width]
+            n3 = padded[rows[3], firsts[3]:firsts[3] + width]
+            n4 = padded[rows[4], firsts[4]:firsts[4] + width]
+            n5 = padded[rows[5], firsts[5]:firsts[5] + width]
+            n6 = padded[rows[6], firsts[6]:firsts[6] + width]
+            n7 = padded[rows[7], firsts[7]:firsts[7] + width]
             for x in range(width):
-                bits[x] = (bits[x] << np.uint64(1)) | np.uint64(neighbour[x] < centre[x])
+                c = centre[x]
+                bits[x] = ((bits[x] << np.uint64(8))
+                           | (np.uint64(n0[x] < c) << np.uint64(7))
+                           | (np.uint64(n1[x] < c) << np.uint64(6))
+                           | (np.uint64(n2[x] < c) << np.uint64(5))
+                           | (np.uint64(n3[x] < c) << np.uint64(4))
+                           | (np.uint64(n4[x] < c) << np.uint64(3))
+                           | (np.uint64(n5[x] < c) << np.uint64(2))
+                           | (np.uint64(n6[x] < c) << np.uint64(1))
+                           | np.uint64(n7[x] < c))
+        else:
+            for j in range(taken):
+                neighbour = padded[rows[j], firsts[j]:firsts[j] + width]
+                for x in range(width):
+                    bits[x] = (bits[x] << np.uint64(1)) | np.uint64(neighbour[x] < centre[x])
     for x in range(width):
         out[y, x] = bits[x]
 
@@ -30,8 +65,8 @@ def census_transform(padded, half_w, half_h, band, out):
     """One bit per window neighbour q (row-major, centre skipped): [g(q) < g(p) - band].
 
     ``padded`` is the grey image with ``half_h`` rows and ``half_w`` columns of repeated
-    border pixels on each side. Each row is built one window offset at a time, so that the
-    loop over x (shift, compare, or) vectorises.
+    border pixels on each side. Each row is built eight window offsets at a time, so that
+    the loop over x (shift, compare, or) vectorises.
     """
     height = out.shape[0]
     for y in prange(height):
