@@ -100,3 +100,31 @@ def test_what_a_killed_video_left_is_removed_by_the_next_run(tmp_path, rng):
     for name in (".d.k3j4h2g1.tmp.avi", ".fr.a8b7c6d5.tmp"):
         assert f"removed {tmp_path / name}, left by an earlier run that was killed" \
             in result.output
+
+
+def test_after_a_stop_a_finalizers_failure_is_not_reported():
+    """A signal that lands inside a finalizer's teardown (llvmlite's ObjectRef, half
+    closed) fails again as Python shuts down: after a stop, that is not reported; before
+    one, an unraisable exception still is."""
+    from types import SimpleNamespace
+
+    from vsmatch.cli import common
+
+    seen = []
+    hook = common.quiet_unraisable_stops(seen.append)
+    failure = SimpleNamespace(exc_type=AttributeError, exc_value=AttributeError("x"),
+                              exc_traceback=None, err_msg=None, object=None)
+    saved = list(common.STOPS)
+    try:
+        common.STOPS.clear()
+        hook(failure)
+        assert seen == [failure]
+        common.STOPS.append(15)
+        hook(failure)
+        assert seen == [failure]
+        hook(SimpleNamespace(exc_type=KeyboardInterrupt, exc_value=None, exc_traceback=None,
+                             err_msg=None, object=None))
+        assert seen == [failure]
+    finally:
+        common.STOPS[:] = saved
+
