@@ -68,7 +68,7 @@ def _grow_row(planes, y_n, y, shift, first, stop, brk_row, brk_shift, lim1, lim3
     Numba knows are >= 0) without branches, so LLVM vectorises it, in 16-bit lanes: the
     grey levels' differences (of 8-bit views), the thresholds (at most 255 x 11) and the
     lengths (at most 255) all fit, and twice the lanes of 32 bits fit a vector (the kernel
-    1.8-2.1x faster than with int32 buffers, whose distances LLVM took in 64-bit lanes).
+    1.8-2.2x faster than with int32 buffers, whose distances LLVM took in 64-bit lanes).
     Returns the range of pixels whose arms still grow."""
     count = stop - first
     anchor = planes[0, y, first:stop]
