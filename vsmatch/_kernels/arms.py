@@ -45,11 +45,12 @@ def _colour_change_of_row(image, threshold, along_rows, out, y):
         return
     else:
         here, before, target = image[y], image[y - 1], row
-    if channels == 3:  # written out: the common case, and the hot one
+    if channels == 3 or channels == 1:  # written out: colour or grey views, the hot cases
+        mid, top = min(1, channels - 1), channels - 1  # grey: channel 0 three times
         for x in range(target.shape[0]):
             a = _channel_step(here, before, x, 0)
-            b = _channel_step(here, before, x, 1)
-            c = _channel_step(here, before, x, 2)
+            b = _channel_step(here, before, x, mid)
+            c = _channel_step(here, before, x, top)
             d = a if a > b else b
             d = d if d > c else c
             target[x] = d >= limit
