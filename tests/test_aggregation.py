@@ -130,6 +130,18 @@ def test_arms_past_the_edge_are_refused(rng, side):
         aggregation.aggregate_cross(volume.copy(), arms, reaching, iterations=1)
 
 
+@pytest.mark.parametrize("shape", [(4, 1, 1), (4, 7, 300), (4, 290, 5)])
+def test_arms_kept_inside_end_at_the_edge_or_at_255(rng, shape):
+    arms = rng.integers(0, 256, size=shape).astype(np.uint8)
+    kept = aggregation.keep_arms_inside(arms.copy())
+    height, width = shape[1:]
+    ys, xs = np.mgrid[:height, :width]
+    rooms = np.minimum(np.stack([xs, width - 1 - xs, ys, height - 1 - ys]), 255)
+    np.testing.assert_array_equal(kept, np.minimum(arms, rooms))
+    aggregation.aggregate_cross(rng.random(shape[1:] + (3,), dtype=np.float32), kept,
+                                kept.copy(), iterations=1)  # inside: taken
+
+
 def test_a_line_too_long_for_the_running_sums_is_refused():
     """The running sums' offsets are 32-bit: a line whose sums would pass them is named
     before any work (a view-sized array stands in for the huge volume)."""

@@ -66,6 +66,18 @@ def test_visual_sensitivity_of_a_ramp():
     np.testing.assert_allclose(theta[1:-1, 1:-1], -np.pi / 2, atol=1e-6)
 
 
+@pytest.mark.parametrize("shape", [(1, 1), (1, 7), (6, 1), (2, 2), (23, 31)])
+def test_the_gradient_magnitude_is_opencvs_sobel_on_grey_levels(rng, shape):
+    # The magnitude alone comes from a kernel of its own: on whole numbers, cv2.Sobel's
+    # values to the bit, the mirrored borders (1-pixel sides too) included.
+    grey = rng.integers(0, 256, size=shape).astype(np.float32)
+    magnitude, theta = sensitivity.visual_sensitivity(grey, direction=False)
+    gx, gy = sensitivity.sobel(grey)
+    assert theta is None and magnitude.dtype == np.float32
+    np.testing.assert_array_equal(magnitude, np.sqrt(gx * gx + gy * gy))
+    np.testing.assert_array_equal(sensitivity.visual_sensitivity(grey)[0], magnitude)
+
+
 def test_presmooth_zero_is_identity(rng):
     grey = rng.random((8, 8), dtype=np.float32)
     assert sensitivity.presmooth(grey, 0.0) is grey

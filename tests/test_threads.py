@@ -10,7 +10,7 @@ import pytest
 from vsmatch import datasets, pipeline
 from vsmatch._kernels.rows import dealt
 from vsmatch.bench import thread_count
-from vsmatch.images import upsample_nearest
+from vsmatch.images import mirrored, upsample_nearest
 
 
 @pytest.mark.parametrize("classes", [1, 2, 3, 16])
@@ -40,6 +40,18 @@ def test_upsample_nearest_takes_each_coarse_pixel(dtype, lead):
         fine = upsample_nearest(coarse, shape)
         assert fine.dtype == coarse.dtype and fine.flags.c_contiguous
         np.testing.assert_array_equal(fine, coarse[..., rows[:, None], cols[None, :]])
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.int32])  # a kernel's, NumPy's
+@pytest.mark.parametrize("shape", [(4, 5, 7), (3, 1), (6, 9)])
+def test_mirrored_reverses_the_last_axis_then_pads(dtype, shape):
+    array = (np.random.default_rng(1).random(shape) * 200).astype(dtype)
+    for view in (array, array[..., ::2]):  # contiguous or not
+        for pad, fill in ((0, 0), (5, 255)):
+            padding = np.full(view.shape[:-1] + (pad,), fill, dtype)
+            got = mirrored(view, pad=pad, fill=fill)
+            assert got.dtype == dtype and got.flags.c_contiguous
+            np.testing.assert_array_equal(got, np.concatenate([view[..., ::-1], padding], -1))
 
 
 @pytest.mark.data

@@ -8,6 +8,7 @@ import numpy as np
 
 from ._kernels.aggregate import LANES, sum_along_arms, sum_over_arms, sum_over_lanes
 from ._kernels.arms import DOWN, LEFT, RIGHT, UP
+from ._kernels.arms import channel_planes
 from ._kernels.arms import cross_arms as _cross_arms_kernel
 from ._kernels.rows import thread_classes
 from .bands import Bands, of
@@ -25,14 +26,17 @@ def cross_arms(image: np.ndarray, theta: np.ndarray | None, sensitivity: np.ndar
     (``theta`` may be None when ``cfg.kappa`` is 0: the arms then ignore it).
     """
     image = as_channels(image)
-    strength = np.minimum(1.0, sensitivity / cfg.g_sat).astype(np.float32)
-    if theta is None:
-        if cfg.kappa != 0:
+    if cfg.kappa != 0:
+        if theta is None:
             raise ValueError("direction-guided arms (kappa != 0) need the gradient direction")
-        theta = np.zeros(strength.shape, np.float32)  # read only where kappa != 0
-    out = np.empty((4,) + strength.shape, dtype=np.uint8)  # l2 <= 255 (config range)
-    planes = np.ascontiguousarray(np.moveaxis(image, 2, 0), dtype=np.int16)
-    _cross_arms_kernel(planes, np.ascontiguousarray(theta, dtype=np.float32), strength,
+        strength = np.minimum(1.0, sensitivity / cfg.g_sat).astype(np.float32)
+        theta = np.ascontiguousarray(theta, dtype=np.float32)
+    else:  # the kernel reads the direction and its strength only where kappa != 0
+        theta = strength = np.empty((0, 0), np.float32)
+    out = np.empty((4,) + image.shape[:2], dtype=np.uint8)  # l2 <= 255 (config range)
+    planes = np.empty((image.shape[2],) + image.shape[:2], np.int16)
+    channel_planes(image, planes)
+    _cross_arms_kernel(planes, theta, strength,
                        colour_change(image, cfg.tau2, along_rows=True),
                        colour_change(image, cfg.tau2, along_rows=False),
                        float(cfg.tau1), float(cfg.tau3), int(cfg.l1), int(cfg.l2),

@@ -5,6 +5,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ._kernels.sobel import gradient_magnitude
+
 
 def presmooth(image: np.ndarray, sigma: float) -> np.ndarray:
     """Gaussian blur of a view before all stages (same dtype); sigma 0 leaves it as is."""
@@ -23,9 +25,15 @@ def visual_sensitivity(grey: np.ndarray, direction: bool = True
     gives None for theta: only direction-guided arms (``arms.kappa`` != 0) read it, and
     atan2 costs ten times the rest.
     """
-    gx, gy = sobel(np.ascontiguousarray(grey, dtype=np.float32))
-    theta = np.arctan2(gy, gx).astype(np.float32) if direction else None
-    return np.sqrt(gx * gx + gy * gy), theta
+    grey = np.ascontiguousarray(grey, dtype=np.float32)
+    if not direction:
+        # The magnitude alone on every core (cv2.Sobel and NumPy's passes took one): on
+        # grey levels, whole numbers, the same values.
+        magnitude = np.empty_like(grey)
+        gradient_magnitude(grey, magnitude)
+        return magnitude, None
+    gx, gy = sobel(grey)
+    return np.sqrt(gx * gx + gy * gy), np.arctan2(gy, gx).astype(np.float32)
 
 
 #: The square (pixels) :func:`texture` averages the gradient over.

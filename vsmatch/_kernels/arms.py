@@ -183,6 +183,22 @@ def _arms_of_row(planes, theta, strength, breaks_h, breaks_v, tau1, tau3, l1, l2
                 out[2 * axis + side, y, x] = arm[x]  # LEFT, RIGHT, UP, DOWN
 
 
+@njit(**ROW_OPTIONS)
+def _channel_planes_of_row(image, out, y):
+    for c in range(image.shape[2]):
+        plane = out[c, y]
+        for x in range(image.shape[1]):
+            plane[x] = image[y, x, c]
+
+
+@njit(**KERNEL_OPTIONS)
+def channel_planes(image, out):
+    """``out[c, y, x]`` = ``image[y, x, c]``: an (H, W, C) uint8 view as the (C, H, W)
+    int16 planes :func:`cross_arms` reads, a row a task."""
+    for y in prange(image.shape[0]):
+        _channel_planes_of_row(image, out, np.int64(y))
+
+
 @njit(**KERNEL_OPTIONS)
 def cross_arms(planes, theta, strength, breaks_h, breaks_v, tau1, tau3, l1, l2, kappa, shrink,
                out):

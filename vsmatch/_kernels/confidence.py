@@ -3,6 +3,7 @@ from numba import njit, prange
 
 from . import KERNEL_OPTIONS, ROW_OPTIONS
 from .rows import dealt
+from .sobel import mirrored_index, sobel_at
 
 
 @njit(inline="always")
@@ -252,7 +253,7 @@ def _pixel_terms_of_row(margin, below_mean, raw_margin, support, labels, valid, 
     """:func:`pixel_terms` of row ``y``."""
     height, width = disparity.shape
     labelled = labels.shape[0] > 0
-    above, below = _mirrored(y - 1, height), _mirrored(y + 1, height)
+    above, below = mirrored_index(y - 1, height), mirrored_index(y + 1, height)
     for x in range(width):
         m = _unit(margin[y, x])
         out_margin[y, x] = m
@@ -282,31 +283,15 @@ def _pixel_terms_of_row(margin, below_mean, raw_margin, support, labels, valid, 
     for x in range(1, width - 1):
         gradient[0, y, x] = _sobel_sum(up, here, down, x - 1, x, x + 1)
     for x in (0, width - 1):
-        gradient[0, y, x] = _sobel_sum(up, here, down, _mirrored(x - 1, width), x,
-                                       _mirrored(x + 1, width))
+        gradient[0, y, x] = _sobel_sum(up, here, down, mirrored_index(x - 1, width), x,
+                                       mirrored_index(x + 1, width))
 
 
 @njit(inline="always")
 def _sobel_sum(up, here, down, west, x, east):
     """|gx| + |gy| of the 3 x 3 Sobel derivatives at column ``x`` of the row ``here``."""
-    gx = ((np.float32(up[east]) + 2 * np.float32(here[east]) + np.float32(down[east]))
-          - (np.float32(up[west]) + 2 * np.float32(here[west]) + np.float32(down[west])))
-    gy = ((np.float32(down[west]) + 2 * np.float32(down[x]) + np.float32(down[east]))
-          - (np.float32(up[west]) + 2 * np.float32(up[x]) + np.float32(up[east])))
+    gx, gy = sobel_at(up, here, down, west, x, east)
     return abs(gx) + abs(gy)
-
-
-@njit(inline="always")
-def _mirrored(i, n):
-    """Index ``i`` mirrored into 0 .. n - 1 about the edge lines (BORDER_REFLECT_101),
-    for ``i`` at most one step outside."""
-    if n == 1:
-        return 0
-    if i < 0:
-        return -i
-    if i >= n:
-        return 2 * n - 2 - i
-    return i
 
 
 @njit(**KERNEL_OPTIONS)
