@@ -42,7 +42,7 @@ def test_upsample_nearest_takes_each_coarse_pixel(dtype, lead):
         np.testing.assert_array_equal(fine, coarse[..., rows[:, None], cols[None, :]])
 
 
-@pytest.mark.parametrize("dtype", [np.uint8, np.int32])  # a kernel's, NumPy's
+@pytest.mark.parametrize("dtype", [np.uint8, np.int32])
 @pytest.mark.parametrize("shape", [(4, 5, 7), (3, 1), (6, 9)])
 def test_mirrored_reverses_the_last_axis_then_pads(dtype, shape):
     array = (np.random.default_rng(1).random(shape) * 200).astype(dtype)

@@ -27,8 +27,8 @@ def visual_sensitivity(grey: np.ndarray, direction: bool = True
     """
     grey = np.ascontiguousarray(grey, dtype=np.float32)
     if not direction:
-        # The magnitude alone on every core (cv2.Sobel and NumPy's passes took one): on
-        # grey levels, whole numbers, the same values.
+        # The magnitude alone in one pass (two cv2.Sobel filters and NumPy's passes took
+        # five): on grey levels, whole numbers, the same values.
         magnitude = np.empty_like(grey)
         gradient_magnitude(grey, magnitude)
         return magnitude, None

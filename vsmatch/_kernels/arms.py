@@ -3,7 +3,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS, ROW_OPTIONS
+from . import KERNEL_OPTIONS, ROW_OPTIONS, SERIAL_OPTIONS
 
 # Arm order in the first axis of an arms array, (4, H, W).
 LEFT, RIGHT, UP, DOWN = 0, 1, 2, 3
@@ -183,20 +183,17 @@ def _arms_of_row(planes, theta, strength, breaks_h, breaks_v, tau1, tau3, l1, l2
                 out[2 * axis + side, y, x] = arm[x]  # LEFT, RIGHT, UP, DOWN
 
 
-@njit(**ROW_OPTIONS)
-def _channel_planes_of_row(image, out, y):
-    for c in range(image.shape[2]):
-        plane = out[c, y]
-        for x in range(image.shape[1]):
-            plane[x] = image[y, x, c]
-
-
-@njit(**KERNEL_OPTIONS)
+@njit(**SERIAL_OPTIONS)
 def channel_planes(image, out):
     """``out[c, y, x]`` = ``image[y, x, c]``: an (H, W, C) uint8 view as the (C, H, W)
-    int16 planes :func:`cross_arms` reads, a row a task."""
-    for y in prange(image.shape[0]):
-        _channel_planes_of_row(image, out, np.int64(y))
+    int16 planes :func:`cross_arms` reads (one core: 0.35 against NumPy's 0.61 ms on a
+    718 x 496 view; 0.30 on two threads, for four times the compiling)."""
+    height, width, channels = image.shape
+    for c in range(channels):
+        for y in range(height):
+            plane = out[c, y]
+            for x in range(width):
+                plane[x] = image[y, x, c]
 
 
 @njit(**KERNEL_OPTIONS)

@@ -1,7 +1,7 @@
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from . import KERNEL_OPTIONS, ROW_OPTIONS
+from . import SERIAL_OPTIONS
 
 
 @njit(inline="always")
@@ -29,25 +29,21 @@ def mirrored_index(i, n):
     return i
 
 
-@njit(**ROW_OPTIONS)
-def _magnitude_of_row(grey, out, y):
-    """:func:`gradient_magnitude` of row ``y``."""
-    height, width = grey.shape
-    up, here = grey[mirrored_index(y - 1, height)], grey[y]
-    down = grey[mirrored_index(y + 1, height)]
-    row = out[y]
-    for x in range(1, width - 1):
-        gx, gy = sobel_at(up, here, down, x - 1, x, x + 1)
-        row[x] = np.sqrt(gx * gx + gy * gy)
-    for x in (0, width - 1):
-        gx, gy = sobel_at(up, here, down, mirrored_index(x - 1, width), x,
-                          mirrored_index(x + 1, width))
-        row[x] = np.sqrt(gx * gx + gy * gy)
-
-
-@njit(**KERNEL_OPTIONS)
+@njit(**SERIAL_OPTIONS)
 def gradient_magnitude(grey, out):
     """``out`` = sqrt(gx^2 + gy^2) of the 3 x 3 Sobel derivatives of ``grey`` (float32,
-    borders mirrored as OpenCV's BORDER_REFLECT_101), a row a task."""
-    for y in prange(grey.shape[0]):
-        _magnitude_of_row(grey, out, np.int64(y))
+    borders mirrored as OpenCV's BORDER_REFLECT_101). One core: one pass where two Sobel
+    filters and NumPy's three took five (0.64 against 1.76 ms on a 718 x 496 view; 0.41
+    on two threads, for four times the compiling)."""
+    height, width = grey.shape
+    for y in range(height):
+        up, here = grey[mirrored_index(y - 1, height)], grey[y]
+        down = grey[mirrored_index(y + 1, height)]
+        row = out[y]
+        for x in range(1, width - 1):
+            gx, gy = sobel_at(up, here, down, x - 1, x, x + 1)
+            row[x] = np.sqrt(gx * gx + gy * gy)
+        for x in (0, width - 1):
+            gx, gy = sobel_at(up, here, down, mirrored_index(x - 1, width), x,
+                              mirrored_index(x + 1, width))
+            row[x] = np.sqrt(gx * gx + gy * gy)
