@@ -153,18 +153,20 @@ def test_a_line_too_long_for_the_running_sums_is_refused():
                                     scratch=np.empty((1, 1, 1), np.float32))
 
 
-@pytest.mark.parametrize("channels", [1, 3])
+@pytest.mark.parametrize("channels", [1, 2, 3])  # grey and colour written out, the rest
 @pytest.mark.parametrize("threshold", [0.0, 16.5, 17.0, 300.0])
 def test_colour_change_is_the_largest_channel_step_against_the_threshold(rng, channels,
                                                                          threshold):
-    from vsmatch.images import colour_change
+    from vsmatch.images import channel_planes, colour_change
 
     image = rng.integers(0, 256, size=(23, 37, channels)).astype(np.uint8)
     image[5:9, 10:20] = 128  # flat patches: steps of 0
     wide = image.astype(np.int32)
     for along_rows in (True, False):
-        got = colour_change(image if channels == 3 else image[:, :, 0], threshold,
-                            along_rows=along_rows)
+        view = image[:, :, 0] if channels == 1 else image
+        got = colour_change(view, threshold, along_rows=along_rows)
+        np.testing.assert_array_equal(colour_change(view, threshold, along_rows=along_rows,
+                                                    planes=channel_planes(view)), got)
         step = np.abs(np.diff(wide, axis=1 if along_rows else 0)).max(axis=2) >= threshold
         want = np.ones(image.shape[:2], np.uint8)
         if along_rows:

@@ -8,12 +8,12 @@ import numpy as np
 
 from ._kernels.aggregate import LANES, sum_along_arms, sum_over_arms, sum_over_lanes
 from ._kernels.arms import DOWN, LEFT, RIGHT, UP
-from ._kernels.arms import channel_planes
 from ._kernels.arms import cross_arms as _cross_arms_kernel
 from ._kernels.rows import thread_classes
 from .bands import Bands, of
 from .config import ArmsConfig
-from .images import as_channels, colour_change, downsample, mirrored, to_grey, upsample_nearest
+from .images import (as_channels, channel_planes, colour_change, downsample, mirrored, to_grey,
+                     upsample_nearest)
 from .sensitivity import visual_sensitivity
 
 
@@ -34,11 +34,10 @@ def cross_arms(image: np.ndarray, theta: np.ndarray | None, sensitivity: np.ndar
     else:  # the kernel reads the direction and its strength only where kappa != 0
         theta = strength = np.empty((0, 0), np.float32)
     out = np.empty((4,) + image.shape[:2], dtype=np.uint8)  # l2 <= 255 (config range)
-    planes = np.empty((image.shape[2],) + image.shape[:2], np.int16)
-    channel_planes(image, planes)
+    planes = channel_planes(image)
     _cross_arms_kernel(planes, theta, strength,
-                       colour_change(image, cfg.tau2, along_rows=True),
-                       colour_change(image, cfg.tau2, along_rows=False),
+                       colour_change(image, cfg.tau2, along_rows=True, planes=planes),
+                       colour_change(image, cfg.tau2, along_rows=False, planes=planes),
                        float(cfg.tau1), float(cfg.tau3), int(cfg.l1), int(cfg.l2),
                        float(cfg.kappa), bool(cfg.shrink), out)
     return out

@@ -6,6 +6,7 @@ import cv2
 import numpy as np
 
 from ._kernels.arms import colour_change as colour_change_kernel
+from ._kernels.images import channel_planes as channel_planes_kernel
 from ._kernels.images import doubled
 from ._kernels.photometric import box_mean, plane_box_mean
 
@@ -28,13 +29,25 @@ def as_channels(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(image, dtype=np.uint8)
 
 
-def colour_change(image: np.ndarray, threshold: float, *, along_rows: bool) -> np.ndarray:
+def channel_planes(image: np.ndarray) -> np.ndarray:
+    """The view as (C, H, W) int16 planes, each channel's pixels side by side (a grey
+    view: one plane), as the arms and the colour changes read it."""
+    image = as_channels(image)
+    planes = np.empty((image.shape[2],) + image.shape[:2], np.int16)
+    channel_planes_kernel(image, planes)
+    return planes
+
+
+def colour_change(image: np.ndarray, threshold: float, *, along_rows: bool,
+                  planes: np.ndarray | None = None) -> np.ndarray:
     """uint8 (H, W): 1 where the largest channel difference from the previous pixel
     along the axis ((y, x - 1) on rows, (y - 1, x) on columns) is ``threshold`` or more,
-    and in the first column (row), which has no previous pixel."""
-    image = as_channels(image)
-    out = np.empty(image.shape[:2], dtype=np.uint8)
-    colour_change_kernel(image, float(threshold), bool(along_rows), out)
+    and in the first column (row), which has no previous pixel. ``planes``: the view's
+    :func:`channel_planes`, where the caller has them."""
+    if planes is None:
+        planes = channel_planes(image)
+    out = np.empty(planes.shape[1:], dtype=np.uint8)
+    colour_change_kernel(planes, float(threshold), bool(along_rows), out)
     return out
 
 

@@ -7,7 +7,7 @@ import numpy as np
 from ._kernels.scanline import LANES, scanline_columns, scanline_diagonal_pass, scanline_rows
 from .bands import Bands, of
 from .config import ScanlineConfig
-from .images import as_channels, colour_change, mirrored
+from .images import as_channels, channel_planes, colour_change, mirrored
 
 #: Columns walked side by side in the column passes (``_kernels.scanline.scanline_columns``);
 #: the result does not depend on it.
@@ -34,9 +34,11 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
     banded = not bands.is_full
     p1s, p2s = penalties(cfg)
     weight = np.float32(1.0 / cfg.directions)
+    planes = channel_planes(left), channel_planes(right)  # for both passes' change maps
     for along_rows in (True, False):
         # LANES more: a narrow band's step reads that far.
-        change_l, change_r_rev = change_maps(left, right, cfg.tau, along_rows, n_disp + LANES)
+        change_l, change_r_rev = change_maps(left, right, cfg.tau, along_rows, n_disp + LANES,
+                                             planes)
         if along_rows:  # first: writes every cell of ``out``
             scanline_rows(volume, lo, count, banded, change_l, change_r_rev, p1s, p2s, weight, out)
         else:
@@ -67,12 +69,15 @@ def diagonal_colour_change(image: np.ndarray, threshold: float, step_x: int) -> 
 
 
 def change_maps(left: np.ndarray, right: np.ndarray, tau: float, along_rows: bool,
-                n_disp: int) -> tuple[np.ndarray, np.ndarray]:
+                n_disp: int, planes: tuple[np.ndarray, np.ndarray] | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
     """Where each view's colour changes by ``tau`` or more along the pass; the right
     view's reversed along x and padded with ``n_disp`` ones (no right pixel: a change),
-    as the scanline kernels read it."""
-    change_r = colour_change(right, tau, along_rows=along_rows)
-    return (colour_change(left, tau, along_rows=along_rows),
+    as the scanline kernels read it. ``planes``: both views' ``channel_planes``, where
+    the caller has them."""
+    planes_l, planes_r = (None, None) if planes is None else planes
+    change_r = colour_change(right, tau, along_rows=along_rows, planes=planes_r)
+    return (colour_change(left, tau, along_rows=along_rows, planes=planes_l),
             mirrored(change_r, pad=n_disp, fill=1))
 
 

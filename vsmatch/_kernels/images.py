@@ -16,3 +16,26 @@ def doubled(planes, out):
             target = out[k, y]
             for x in range(width):
                 target[x] = source[x // 2]
+
+
+@njit(**SERIAL_OPTIONS)
+def channel_planes(image, out):
+    """``out[c, y, x]`` = ``image[y, x, c]``: an (H, W, C) uint8 view as the (C, H, W)
+    int16 planes the arms and the colour changes read (``_kernels.arms``). One core, a
+    colour view's three channels a pixel at a time: 0.28 ms on a 718 x 496 view (a channel
+    at a time 0.44, NumPy 0.80)."""
+    height, width, channels = image.shape
+    if channels == 3:
+        for y in range(height):
+            row = image[y]
+            blue, green, red = out[0, y], out[1, y], out[2, y]
+            for x in range(width):
+                blue[x] = row[x, 0]
+                green[x] = row[x, 1]
+                red[x] = row[x, 2]
+        return
+    for c in range(channels):
+        for y in range(height):
+            plane = out[c, y]
+            for x in range(width):
+                plane[x] = image[y, x, c]
