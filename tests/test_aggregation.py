@@ -174,3 +174,30 @@ def test_colour_change_is_the_largest_channel_step_against_the_threshold(rng, ch
         else:
             want[1:, :] = step
         np.testing.assert_array_equal(got, want)
+
+
+def test_arms_and_scanline_take_the_views_planes_made_once(rng):
+    """The solver makes each view's int16 planes once and hands them to the arms and the
+    scanline: the same arms and path costs as each making its own (colour and grey)."""
+    from vsmatch import optimization
+    from vsmatch.config import load_config
+    from vsmatch.images import channel_planes
+
+    cfg = load_config("default")
+    for channels in (3, 1):
+        left = rng.integers(0, 256, size=(29, 41, channels)).astype(np.uint8)
+        right = np.roll(left, -3, axis=1)
+        if channels == 1:
+            left, right = left[:, :, 0], right[:, :, 0]
+        planes = channel_planes(left), channel_planes(right)
+        grad = np.zeros(left.shape[:2], np.float32)
+        np.testing.assert_array_equal(
+            aggregation.cross_arms(left, None, grad, cfg.arms, planes[0]),
+            aggregation.cross_arms(left, None, grad, cfg.arms))
+        # They are read, not made again: the other view's planes give other arms.
+        assert not np.array_equal(aggregation.cross_arms(left, None, grad, cfg.arms, planes[1]),
+                                  aggregation.cross_arms(left, None, grad, cfg.arms))
+        volume = rng.random((29, 41, 8), dtype=np.float32)
+        np.testing.assert_array_equal(
+            optimization.scanline_optimise(volume, left, right, cfg.scanline, planes=planes),
+            optimization.scanline_optimise(volume, left, right, cfg.scanline))

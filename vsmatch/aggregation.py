@@ -18,12 +18,13 @@ from .sensitivity import visual_sensitivity
 
 
 def cross_arms(image: np.ndarray, theta: np.ndarray | None, sensitivity: np.ndarray,
-               cfg: ArmsConfig) -> np.ndarray:
+               cfg: ArmsConfig, planes: np.ndarray | None = None) -> np.ndarray:
     """Arm lengths ``(4, H, W)`` uint8 in the order left, right, up, down.
 
     ``image`` is the colour (or grey) image the colour distances are measured on;
     ``theta`` and ``sensitivity`` are the direction and magnitude of its gradient
     (``theta`` may be None when ``cfg.kappa`` is 0: the arms then ignore it).
+    ``planes``: the image's ``channel_planes``, where the caller has them.
     """
     image = as_channels(image)
     if cfg.kappa != 0:
@@ -34,7 +35,8 @@ def cross_arms(image: np.ndarray, theta: np.ndarray | None, sensitivity: np.ndar
     else:  # the kernel reads the direction and its strength only where kappa != 0
         theta = strength = np.empty((0, 0), np.float32)
     out = np.empty((4,) + image.shape[:2], dtype=np.uint8)  # l2 <= 255 (config range)
-    planes = channel_planes(image)
+    if planes is None:
+        planes = channel_planes(image)
     _cross_arms_kernel(planes, theta, strength,
                        colour_change(image, cfg.tau2, along_rows=True, planes=planes),
                        colour_change(image, cfg.tau2, along_rows=False, planes=planes),

@@ -17,7 +17,7 @@ from . import (aggregation, confidence, cost, disparity, noise, optimization, re
 from .bands import Bands
 from .config import Config, CostConfig
 from .disparity import INVALID_DISPARITY
-from .images import to_grey
+from .images import channel_planes, to_grey
 from .result import Learnt, MatchResult, learn, timed
 
 
@@ -91,11 +91,15 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
         arms_cfg = dataclasses.replace(arms_cfg, l1=min(arms_cfg.l1, support),
                                        l2=min(arms_cfg.l2, support))
     arms_l = arms_r = None
+    # The views' int16 planes, made once for the arms' colour distances and the
+    # scanline's change maps (both read them).
+    planes = ((channel_planes(left), channel_planes(right))
+              if aggregate or scanline or cfg.voting.enabled else None)
     if aggregate or cfg.voting.enabled:
         with stage("arms"):
-            arms_l = aggregation.cross_arms(left, theta_l, grad_l, arms_cfg)
+            arms_l = aggregation.cross_arms(left, theta_l, grad_l, arms_cfg, planes[0])
             if aggregate:
-                arms_r = aggregation.cross_arms(right, theta_r, grad_r, arms_cfg)
+                arms_r = aggregation.cross_arms(right, theta_r, grad_r, arms_cfg, planes[1])
     # One work volume serves aggregation, then holds the scanline costs: the cost volume
     # is allocated twice, not three times (allocation is a measurable share of the time).
     work = volumes.volume("work", volume.shape)
@@ -109,7 +113,7 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
     if scanline:
         with stage("scanline"):
             volume = optimization.scanline_optimise(volume, left, right, cfg.scanline,
-                                                    out=work, bands=bands)
+                                                    out=work, bands=bands, planes=planes)
 
     # The winners' cost curves feed the confidence; a band's curve is short, so the caller
     # brings whole-range ones (the coarse level's, the last full search's).

@@ -16,7 +16,8 @@ COLUMN_CHUNK = 8
 
 def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
                       cfg: ScanlineConfig, out: np.ndarray | None = None,
-                      bands: Bands | None = None) -> np.ndarray:
+                      bands: Bands | None = None,
+                      planes: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """The mean of the directional path costs, (H, W, B): left, right, up, down, and with
     ``directions: 8`` the four diagonals, over the candidates of ``bands`` (the volume's;
     default the whole range), a candidate outside the previous pixel's band being
@@ -25,7 +26,8 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
     P1 and P2 are divided by ``reduce_one`` where the colour changes by ``tau`` or more
     between a pixel and the previous one on the path in one image (left pixel, or its
     match at d in the right image), by ``reduce_both`` where it does in both.
-    ``out``, if given, is a work volume of the same shape to write the result into.
+    ``out``, if given, is a work volume of the same shape to write the result into;
+    ``planes``: both views' ``channel_planes``, where the caller has them.
     """
     if out is None:
         out = np.empty_like(volume)  # the first pass writes every cell of the bands
@@ -34,7 +36,8 @@ def scanline_optimise(volume: np.ndarray, left: np.ndarray, right: np.ndarray,
     banded = not bands.is_full
     p1s, p2s = penalties(cfg)
     weight = np.float32(1.0 / cfg.directions)
-    planes = channel_planes(left), channel_planes(right)  # for both passes' change maps
+    if planes is None:  # for both passes' change maps
+        planes = channel_planes(left), channel_planes(right)
     for along_rows in (True, False):
         # LANES more: a narrow band's step reads that far.
         change_l, change_r_rev = change_maps(left, right, cfg.tau, along_rows, n_disp + LANES,

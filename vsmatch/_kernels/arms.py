@@ -109,14 +109,12 @@ def _grow_row(planes, y_n, y, shift, first, stop, brk_row, brk_shift, lim1, lim3
     anchor = planes[0, y, first:stop]
     near = planes[0, y_n, first + shift:stop + shift]
     for i in range(count):
-        v = np.int16(near[i] - anchor[i])
-        dist[i] = v if v >= 0 else -v
+        dist[i] = _step(near, anchor, i)
     for c in range(1, planes.shape[0]):
         anchor = planes[c, y, first:stop]
         near = planes[c, y_n, first + shift:stop + shift]
         for i in range(count):
-            v = np.int16(near[i] - anchor[i])
-            v = v if v >= 0 else -v
+            v = _step(near, anchor, i)
             d = dist[i]
             dist[i] = v if v > d else d
     brk = brk_row[first + brk_shift:stop + brk_shift]

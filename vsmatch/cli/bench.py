@@ -27,7 +27,7 @@ from .main import main
               show_default=True, help="Alternating rounds per pair; the fastest of each "
                                       "method is kept.")
 @click.option("--no-cold", is_flag=True, help="Skip the empty-cache start-up run "
-              "(it compiles every kernel the config calls, about 20 s on 2 cores).")
+              "(it compiles every kernel the config calls, 50-60 s on 2 cores).")
 @click.option("--no-size", is_flag=True, help="Skip the size series (Adirondack, a KITTI "
               "frame, 1.5 megapixels, 4x and 4x twice as tall; several minutes).")
 @click.option("--threads", "threads", default=None, metavar="N[,N...]",
