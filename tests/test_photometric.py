@@ -36,6 +36,20 @@ def test_the_map_undoes_an_exposure_change_learnt_at_matched_pixels(rng):
     assert np.abs(mapped[:, :-shift].astype(int) - left[:, shift:]).mean() < 1.0
 
 
+def test_levels_the_matches_do_not_hold_keep_their_steps(rng):
+    """Matches that hold right levels 20-129 only (a bright thin object unmatched): the
+    map learns the exposure's offset there and carries it on in steps of one, rather than
+    putting every level above onto the left's brightest (which flattened wires' texture)."""
+    left = rng.integers(20, 130, size=(60, 80), dtype=np.uint8)
+    right = (left + 10).astype(np.uint8)  # right pixel x is left pixel x, 10 levels up
+    correction = photometric.learn(left, right, np.zeros((60, 80), np.float32),
+                                   np.ones((60, 80), bool))
+    table = correction.table[:, 0].astype(int)
+    assert np.abs(table[30:140] - (np.arange(30, 140) - 10)).max() <= 1  # learnt
+    np.testing.assert_array_equal(table[140:], np.arange(140, 256) - 10)  # one to one
+    np.testing.assert_array_equal(table[:30], np.maximum(np.arange(30) - 10, 0))
+
+
 def test_unrelated_views_leave_a_large_residual(rng):
     left = rng.integers(0, 256, size=(60, 80, 3), dtype=np.uint8)
     right = rng.integers(0, 256, size=(60, 80, 3), dtype=np.uint8)

@@ -75,8 +75,10 @@ def learn(left: np.ndarray, right: np.ndarray, disp: np.ndarray,
         # the same place in the matched pixels' distribution (counts are exact on uint8).
         ranks_l = _mid_ranks(at_left[:, c])
         present = np.bincount(at_left[:, c], minlength=256) > 0
-        table[:, c] = np.clip(np.rint(np.interp(_mid_ranks(at_right[:, c]),
-                                                ranks_l[present], levels[present])), 0, 255)
+        matched_levels = np.interp(_mid_ranks(at_right[:, c]), ranks_l[present],
+                                   levels[present])
+        table[:, c] = np.clip(np.rint(_one_to_one_beyond_matches(matched_levels, at_right[:, c])),
+                              0, 255)
     mapped = np.empty_like(at_right)
     for c in range(at_right.shape[1]):
         mapped[:, c] = table[at_right[:, c], c]
@@ -136,6 +138,19 @@ def difference_field(at_left: np.ndarray, mapped: np.ndarray, ys: np.ndarray,
     field = field.reshape(height, width, channels)
     # What noise and the map's rounding leave is no field: only its excess is added.
     return (np.sign(field) * np.maximum(np.abs(field) - FIELD_DEAD_BAND, 0)).astype(np.float32)
+
+
+def _one_to_one_beyond_matches(mapped: np.ndarray, right_levels: np.ndarray) -> np.ndarray:
+    """``mapped`` (each grey level's new value, float (256,)) in steps of one level beyond
+    the lowest and the highest of the matched ``right_levels``, from its value there. The
+    quantiles put every level the matches do not hold onto the left's extreme: a thin
+    bright wire, unmatched a level down, lost its texture (200-240 all mapped to 201) and
+    the wires their match. An exposure change moves levels; it does not merge them."""
+    low, high = int(right_levels.min()), int(right_levels.max())
+    out = mapped.astype(np.float64)
+    out[high + 1:] = out[high] + np.arange(1, 256 - high)
+    out[:low] = out[low] - np.arange(low, 0, -1)
+    return out
 
 
 def _mid_ranks(values: np.ndarray) -> np.ndarray:
