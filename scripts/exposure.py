@@ -42,7 +42,7 @@ def main() -> None:
             off_all.append(figures[1])
             fit = result.photometric
             learnt = ("" if fit is None else
-                      f"{fit.before:7.2f}{fit.residual:7.2f}{result.config.cost.ad_weight:7.2f}")
+                      f"{fit.before:7.2f}{fit.residual:7.2f}{result.colour_weight:7.2f}")
             print(f"{name:<24}{s.name:<13}{learnt:>21}{figures[0]:8.2f}{figures[1]:8.2f}",
                   flush=True)
         print(f"{name:<24}{'mean':<13}{'':>21}{np.mean(on_all):8.2f}{np.mean(off_all):8.2f}")
