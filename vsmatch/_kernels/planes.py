@@ -172,49 +172,34 @@ def fit_region_planes(disp, weight, arms, min_weight, min_spread, scratch, plane
                              np.int64(block), sums, m)
 
 
-@njit(inline="always")
-def _reach(values, jump, out):
-    """out[i] = how far back from i (towards index 0) one may walk along ``values``
-    without a step of more than ``jump`` between consecutive finite values (non-finite
-    ones are walked over and compared with nothing)."""
-    start = 0  # the first index reachable from the current place
-    last = np.float32(np.nan)
-    last_at = -1
-    for i in range(values.shape[0]):
-        v = values[i]
-        if np.isfinite(v):
-            if last_at >= 0 and not (np.abs(v - last) <= jump):
-                start = last_at + 1
-            last = v
-            last_at = i
-        out[i] = i - start
-
-
 @njit(**ROW_OPTIONS)
-def _cut_row_arms(arms, disp, jump, y):
-    """:func:`cut_arms_at_jumps`' left and right arms of row ``y``."""
-    width = disp.shape[1]
-    reach = np.empty(width, np.int64)
-    _reach(disp[y], jump, reach)
-    for x in range(width):
-        arms[0, y, x] = min(np.int64(arms[0, y, x]), reach[x])
-    _reach(disp[y, ::-1], jump, reach)
-    for x in range(width):
-        arms[1, y, x] = min(np.int64(arms[1, y, x]), reach[width - 1 - x])
-
-
-@njit(**ROW_OPTIONS)
-def _cut_column_arms(arms, disp, jump, x):
-    """:func:`cut_arms_at_jumps`' up and down arms of column ``x``."""
-    height = disp.shape[0]
-    column = disp[:, x].copy()
-    reach = np.empty(height, np.int64)
-    _reach(column, jump, reach)
-    for y in range(height):
-        arms[2, y, x] = min(np.int64(arms[2, y, x]), reach[y])
-    _reach(column[::-1], jump, reach)
-    for y in range(height):
-        arms[3, y, x] = min(np.int64(arms[3, y, x]), reach[height - 1 - y])
+def _cut_line_arms(arms, disp, jump, line, along_rows):
+    """:func:`cut_arms_at_jumps`' two arms along row ``line`` (``along_rows``: left and
+    right) or column ``line`` (up and down): each walk from one end of the line keeps, for
+    every pixel, how far back it may reach without a step of more than ``jump`` between
+    consecutive finite disparities (non-finite ones are walked over and compared with
+    nothing), and cuts the arm pointing back to that. One body for rows and columns and
+    both ends, by index: a quarter of the compiling of four inlined copies over views."""
+    height, width = disp.shape
+    n = width if along_rows else height
+    for side in range(2):  # 0: from the start (the left or up arm), 1: from the end
+        arm = (0 if side == 0 else 1) + (0 if along_rows else 2)
+        start = 0  # the first step reachable from the current place
+        last = np.float32(np.nan)
+        last_at = -1
+        for step in range(n):
+            i = step if side == 0 else n - 1 - step
+            y = line if along_rows else i
+            x = i if along_rows else line
+            v = disp[y, x]
+            if np.isfinite(v):
+                if last_at >= 0 and not (np.abs(v - last) <= jump):
+                    start = last_at + 1
+                last = v
+                last_at = step
+            reach = step - start
+            if reach < arms[arm, y, x]:
+                arms[arm, y, x] = reach
 
 
 @njit(**KERNEL_OPTIONS)
@@ -225,7 +210,10 @@ def cut_arms_at_jumps(arms, disp, jump):
     rejected by the left-right check) neither end an arm nor count in a step. One scan
     each way per row and per column."""
     height, width = disp.shape
-    for y in prange(height):
-        _cut_row_arms(arms, disp, jump, np.int64(y))
-    for x in prange(width):
-        _cut_column_arms(arms, disp, jump, np.int64(x))
+    # Rows cut the left and right arms, columns the up and down ones: no line writes
+    # another's.
+    for line in prange(height + width):
+        if line < height:
+            _cut_line_arms(arms, disp, jump, np.int64(line), True)
+        else:
+            _cut_line_arms(arms, disp, jump, np.int64(line - height), False)
