@@ -147,6 +147,36 @@ def left_right_check(disp_l, disp_r, n_disp, tolerance, labels):
             labels[y, x] = label
 
 
+@njit(**ROW_OPTIONS)
+def _fill_row(disp, labels, image, steps_y, steps_x, max_search, invalid, out, y):
+    """:func:`fill_rejected` of row ``y``."""
+    height, width = disp.shape
+    for x in range(width):
+        label = labels[y, x]
+        if label == VALID:
+            out[y, x] = disp[y, x]
+            continue
+        best = invalid
+        best_score = np.inf
+        for k in range(steps_y.shape[0]):
+            for step in range(1, max_search + 1):
+                # np.rint: np.round's halves to even, and faster to compile.
+                yy = int(np.rint(y + step * steps_y[k]))
+                xx = int(np.rint(x + step * steps_x[k]))
+                if yy < 0 or yy >= height or xx < 0 or xx >= width:
+                    break
+                if labels[yy, xx] == VALID:
+                    if label == OCCLUDED:
+                        score = disp[yy, xx]
+                    else:
+                        score = colour_distance(image, y, x, yy, xx)
+                    if score < best_score:
+                        best_score = score
+                        best = disp[yy, xx]
+                    break
+        out[y, x] = best
+
+
 @njit(**KERNEL_OPTIONS)
 def fill_rejected(disp, labels, image, steps_y, steps_x, max_search, invalid, classes, out):
     """Fill every non-VALID pixel from the first VALID pixel found along each direction.
@@ -154,30 +184,7 @@ def fill_rejected(disp, labels, image, steps_y, steps_x, max_search, invalid, cl
     Occluded pixels take the lowest candidate (the background); mismatched pixels take
     the candidate whose colour is closest. A pixel with no candidate gets ``invalid``.
     """
-    height, width = disp.shape
+    height = disp.shape[0]
     for i in prange(height):  # rows dealt out: only rejected pixels search
-        y = dealt(i, height, classes)
-        for x in range(width):
-            label = labels[y, x]
-            if label == VALID:
-                out[y, x] = disp[y, x]
-                continue
-            best = invalid
-            best_score = np.inf
-            for k in range(steps_y.shape[0]):
-                for step in range(1, max_search + 1):
-                    # np.rint: np.round's halves to even, and faster to compile.
-                    yy = int(np.rint(y + step * steps_y[k]))
-                    xx = int(np.rint(x + step * steps_x[k]))
-                    if yy < 0 or yy >= height or xx < 0 or xx >= width:
-                        break
-                    if labels[yy, xx] == VALID:
-                        if label == OCCLUDED:
-                            score = disp[yy, xx]
-                        else:
-                            score = colour_distance(image, y, x, yy, xx)
-                        if score < best_score:
-                            best_score = score
-                            best = disp[yy, xx]
-                        break
-            out[y, x] = best
+        _fill_row(disp, labels, image, steps_y, steps_x, max_search, invalid, out,
+                  dealt(i, height, classes))

@@ -125,11 +125,12 @@ def matched_colours(left, right, matched, disp, ys, xr, at_left, at_right):
     return i
 
 
-@njit(**KERNEL_OPTIONS)
+@njit(**SERIAL_OPTIONS)
 def corrected_colours(mapped, field, ys, xr, out):
-    """out = clip(rint(mapped + field at (ys, xr)), 0, 255) as uint8, (N, channels)."""
+    """out = clip(rint(mapped + field at (ys, xr)), 0, 255) as uint8, (N, channels): the
+    matched pixels of the small views, on one core (parallel, 0.7x the time)."""
     n, channels = mapped.shape
-    for i in prange(n):
+    for i in range(n):
         for c in range(channels):
             v = np.rint(np.float32(mapped[i, c]) + field[ys[i], xr[i], c])
             out[i, c] = np.uint8(min(np.float32(255.0), max(np.float32(0.0), v)))
