@@ -91,12 +91,10 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
         arms_cfg = dataclasses.replace(arms_cfg, l1=min(arms_cfg.l1, support),
                                        l2=min(arms_cfg.l2, support))
     arms_l = arms_r = None
-    # The views' int16 planes, made once for the arms' colour distances and the
-    # scanline's change maps (both read them).
-    planes = ((channel_planes(left), channel_planes(right))
-              if aggregate or scanline or cfg.voting.enabled else None)
+    planes = None  # the views' int16 planes: the arms make them, the scanline reads them too
     if aggregate or cfg.voting.enabled:
         with stage("arms"):
+            planes = channel_planes(left), channel_planes(right)
             arms_l = aggregation.cross_arms(left, theta_l, grad_l, arms_cfg, planes[0])
             if aggregate:
                 arms_r = aggregation.cross_arms(right, theta_r, grad_r, arms_cfg, planes[1])
