@@ -95,6 +95,11 @@ MUTATIONS = [
              "an end of the range removed", "vsmatch/cli/run.py",
              "    if piled is not None:\n", "    if False:\n",
              ("tests/test_range.py", "tests/test_range_checks.py")),
+    Mutation("exposure-tails-merged", "the exposure map's levels beyond the matched ones "
+             "merged onto its ends again (thin wires lost)", "vsmatch/photometric.py",
+             "    out[high + 1:] = out[high] + np.arange(1, 256 - high)\n"
+             "    out[:low] = out[low] - np.arange(low, 0, -1)\n",
+             "", ("tests/test_photometric.py", "tests/test_thin_structures.py")),
     Mutation("documented-figure-drifts", "a documented figure drifts from its ceiling "
              "(the README's ETH3D 3.76 -> 3.66)", "README.md",
              "| ETH3D (9 scenes), nonocc bad 1.0 | **3.76** |",
