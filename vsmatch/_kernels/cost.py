@@ -1,7 +1,7 @@
 import numpy as np
 from numba import njit, prange
 
-from . import KERNEL_OPTIONS, ROW_APART_OPTIONS
+from . import KERNEL_OPTIONS, ROW_OPTIONS
 from .census import popcount64
 
 
@@ -16,14 +16,15 @@ def _candidates(lo, count, y, x, width):
     return base, last, width - 1 - x + base
 
 
-@njit(**ROW_APART_OPTIONS)
+@njit(**ROW_OPTIONS)
 def _colour_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, colour_r_rev,
                          census_table, grad_table, ad_table, max_cost, lo, count, y, out):
     """:func:`matching_cost_volume` of row ``y`` with the three channels' term. Its output
-    overlaps no input, and the compiler is told so: the loop over the candidates then
-    vectorises without overlap checks (the 13 standard pairs' volumes with `default`: 0.61
-    -> 0.45 s at one thread, 0.31 -> 0.23 s at two). `fast`'s terms (no colour term) came
-    out slower so (0.04 -> 0.05 s; bands of 8 to 31 candidates): they stay in the loop."""
+    overlaps no input, and the compiler is told so (as every body is, ``ROW_OPTIONS``): the
+    loop over the candidates then vectorises without overlap checks (the 13 standard pairs'
+    volumes with `default`: 0.61 -> 0.45 s at one thread, 0.31 -> 0.23 s at two). `fast`'s
+    terms (no colour term) came out slower so (0.04 -> 0.05 s; bands of 8 to 31
+    candidates): they stay in the loop."""
     width, n_disp = out.shape[1], out.shape[2]
     use_grad = grad_table.shape[0] > 0
     for x in range(width):
