@@ -26,7 +26,7 @@ READ_TOGETHER = {
 }
 
 
-def _overlaps(name, dispatcher, args):
+def _overlaps(dispatcher, args):
     """The pairs of ``args``' parameter names whose arrays share memory."""
     params = list(inspect.signature(dispatcher.py_func).parameters)
     arrays = [(params[i], a) for i, a in enumerate(args)
@@ -48,7 +48,7 @@ def _watch(monkeypatch, found, calls):
 
         def call(*args):
             calls.append(name)
-            for pair in _overlaps(name, dispatcher, args):
+            for pair in _overlaps(dispatcher, args):
                 found.add((name,) + pair)
             return dispatcher(*args)
         return wrappers.setdefault(id(dispatcher), call)
