@@ -142,12 +142,73 @@ def test_arms_kept_inside_end_at_the_edge_or_at_255(rng, shape):
                                 kept.copy(), iterations=1)  # inside: taken
 
 
+@pytest.mark.parametrize("largest, length", [(123.0, 718), (3.0, 2872), (1e-3, 40),
+                                             (5e4, 100000), (0.0, 10)])
+def test_fixed_point_scale_is_the_largest_power_of_two_that_fits_a_line(largest, length):
+    from vsmatch._kernels.aggregate import SUM_BITS
+
+    line_max = np.array([largest / 2, largest], np.float32)
+    scale = aggregation.fixed_point_scale(line_max, length)
+    exponent = np.log2(scale)
+    assert exponent == int(exponent) and exponent <= 32
+    total = float(np.float32(largest)) * length
+    assert total * scale < 2.0 ** SUM_BITS
+    assert exponent == 32 or total * scale * 2 >= 2.0 ** SUM_BITS
+
+
+@pytest.mark.parametrize("bad", [np.inf, np.nan])
+def test_a_cost_that_is_not_a_number_is_refused_by_the_running_sums(rng, bad):
+    volume = rng.random((5, 6, 3), dtype=np.float32)
+    volume[2, 3, 1] = bad
+    arms = aggregation.keep_arms_inside(np.full((4, 5, 6), 2, np.uint8))
+    with pytest.raises(ValueError, match="not a finite number"):
+        aggregation.aggregate_cross(volume, arms, arms.copy(), iterations=1)
+
+
+def _long_line_means(volume, reach):
+    """The cross regions' means (rows first) in float64, for arms of ``reach`` pixels cut at
+    the views' edges in both views (:func:`aggregation.keep_arms_inside`)."""
+    height, width, n = volume.shape
+    xs, ys = np.arange(width), np.arange(height)
+    out = np.empty(volume.shape)
+    for d in range(n):
+        # At d the arm is the shorter of the left pixel's and the right pixel x - d's (none
+        # where x - d < 0: no limit); the vertical arms are alike in both views.
+        right = xs - d
+        lo = np.minimum(np.minimum(reach, xs), np.where(right >= 0, np.minimum(reach, right),
+                                                        255))
+        hi = np.minimum(np.minimum(reach, width - 1 - xs),
+                        np.where(right >= 0, np.minimum(reach, width - 1 - right), 255))
+        sums = np.concatenate([np.zeros((height, 1)), np.cumsum(volume[:, :, d], axis=1)], 1)
+        rows = sums[:, xs + hi + 1] - sums[:, xs - lo]
+        sizes = (lo + hi + 1).astype(np.float64)
+        up, down = np.minimum(reach, ys), np.minimum(reach, height - 1 - ys)
+        for y in range(height):
+            out[y, :, d] = rows[y - up[y]:y + down[y] + 1].sum(0) / \
+                (sizes * (up[y] + down[y] + 1))
+    return out
+
+
+def test_running_sums_keep_close_costs_apart_on_a_long_line(rng):
+    """Long rows of large costs: the fixed-point running sums give each region's mean to
+    float32 rounding (float64 sums as the truth), and keep two candidates 1e-4 apart
+    apart."""
+    height, width, n = 3, 3000, 6
+    volume = (2.0 + rng.random((height, width, n))).astype(np.float32)
+    volume[:, :, 1] = volume[:, :, 0] + np.float32(1e-4)
+    arms = aggregation.keep_arms_inside(np.full((4, height, width), 200, np.uint8))
+    running = aggregation.aggregate_cross(volume.copy(), arms, arms.copy(), iterations=1)
+    np.testing.assert_allclose(running, _long_line_means(volume.astype(np.float64), 200),
+                               rtol=1.5e-7, atol=0)
+    assert np.all(running[:, :, 1] > running[:, :, 0])
+
+
 def test_a_line_too_long_for_the_running_sums_is_refused():
     """The running sums' offsets are 32-bit: a line whose sums would pass them is named
     before any work (a view-sized array stands in for the huge volume)."""
-    volume = np.lib.stride_tricks.as_strided(np.zeros(1, np.float32), (1, 2 ** 21, 512),
+    volume = np.lib.stride_tricks.as_strided(np.zeros(1, np.float32), (1, 2 ** 22, 512),
                                              (0, 0, 0))
-    arms = np.zeros((4, 1, 2 ** 21), np.uint8)
+    arms = np.zeros((4, 1, 2 ** 22), np.uint8)
     with pytest.raises(ValueError, match="too long for the running sums"):
         aggregation.aggregate_cross(volume, arms, arms, iterations=1,
                                     scratch=np.empty((1, 1, 1), np.float32))

@@ -6,7 +6,8 @@ import dataclasses
 
 import numpy as np
 
-from ._kernels.aggregate import LANES, sum_along_arms, sum_over_arms, sum_over_lanes
+from ._kernels.aggregate import (LANES, SUM_BITS, sum_along_arms, sum_over_arms,
+                                 sum_over_lanes)
 from ._kernels.arms import DOWN, LEFT, RIGHT, UP
 from ._kernels.arms import cross_arms as _cross_arms_kernel
 from ._kernels.rows import thread_classes
@@ -102,9 +103,9 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
     bands = of(volume, bands)
     narrow = not bands.is_full
     if not narrow and method == "running":
-        # The running sums are read at 32-bit offsets: a line of (sum, size) pairs must fit.
+        # The running sums are read at 32-bit offsets: a line of them must fit.
         line = max(volume.shape[:2]) + 1
-        if 2 * line * volume.shape[2] >= 2 ** 31:
+        if line * volume.shape[2] >= 2 ** 31:
             raise ValueError(f"aggregation: a line of {line - 1} pixels x "
                              f"{volume.shape[2]} candidates is too long for the running "
                              f"sums; use method='direct' or smaller stripes")
@@ -120,6 +121,9 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
     # Narrow bands differ from pixel to pixel: the regions' sizes are counted.
     sizes = np.empty(current.shape if narrow else (0, 0, 0), np.float32)
     none = np.empty((0, 0, 0), np.float32)
+    # The running sums' first pass writes each line's largest sum, from which the second
+    # takes its fixed-point scale.
+    line_max = np.empty(max(current.shape[:2]), np.float32)
 
     def one_pass(src, along_rows, normalise, out):
         if narrow and current.shape[2] == LANES:
@@ -133,13 +137,36 @@ def aggregate_cross(volume: np.ndarray, arms_l: np.ndarray, arms_r: np.ndarray,
             sum_over_arms(src, arms_l, arms_r_rev, along_rows, normalise, bands.lo,
                           bands.count, none, none, thread_classes(), out)
         else:
-            sum_along_arms(src, arms_l, arms_r_rev, along_rows, normalise, out)
+            # The first pass's lines cross the second's: as many as a second line's pixels.
+            length = src.shape[1] if along_rows else src.shape[0]
+            scale = fixed_point_scale(line_max[:length], length) if normalise else 1.0
+            sum_along_arms(src, arms_l, arms_r_rev, along_rows, normalise, scale, line_max,
+                           out)
 
     for it in range(iterations):
         rows_first = it % 2 == 0
         one_pass(current, rows_first, False, scratch)
         one_pass(scratch, not rows_first, True, current)
     return current
+
+
+def fixed_point_scale(line_max: np.ndarray, length: int) -> float:
+    """The power of two by which the running sums' second pass multiplies the first pass's
+    sums (at most ``line_max.max()`` each) to add them as integers: the largest, at most
+    2^32, that keeps a whole line of ``length`` of them below 2^:data:`SUM_BITS`. Integer
+    sums are exact whatever the line's length; the bits dropped lie below 2^-25 on the
+    pairs here (a sum of up to 41 costs of at most 3 over 2,000 pixels), below float32's
+    resolution of such a sum. Refuses a sum that is not a finite number."""
+    largest = float(line_max.max(initial=0.0))
+    if not np.isfinite(largest):
+        raise ValueError("aggregation: the cost volume holds a cost that is not a finite "
+                         "number")
+    total = max(largest * max(length, 1), 2.0 ** -32)
+    exponent = min(32, int(np.floor(SUM_BITS - np.log2(total))))
+    if exponent < 0:
+        raise ValueError(f"aggregation: costs up to {largest:g} over a line of {length} "
+                         "pixels are too large for the running sums; use method='direct'")
+    return float(2.0 ** exponent)
 
 
 def arms_from_below(view: np.ndarray, cfg: ArmsConfig) -> np.ndarray:
