@@ -221,8 +221,13 @@ def _sum_line(src, arms_l, arms_r_rev, along_rows, normalise, scale, line, line_
             for d in range(n_disp):
                 v = np.float32(flat[ends_hi[d]] - flat[ends_lo[d]])
                 result[d] = v
-                top = v if (v > top) | (v != v) else top  # a NaN stays, to be refused
-        line_max[line] = top
+                top = v if v > top else top
+        # A cost that is not a finite number leaves the line's total so: named by a NaN
+        # maximum (tested apart, as a NaN-aware maximum stopped LLVM vectorising the loop).
+        total = 0.0
+        for d in range(n_disp):
+            total += sums[length, d]
+        line_max[line] = top if np.isfinite(total) else np.float32(np.nan)
         return
     # Fixed point: each of the first pass's sums times ``scale`` (a power of two), packed
     # with its region's size (:data:`SIZE_BITS`): integer running sums are exact whatever
