@@ -70,9 +70,11 @@ def test_fasts_full_search_census_keeps_a_5_px_wire_from_the_wall_beside_it():
         kept = result.confidence >= cfg.cloud.min_confidence
         drawn[width] = (as_wire.sum() / wire.sum(), (as_wire & ~wire & kept).sum(),
                         as_wire[wire].mean())
-    # Measured: 1.21x with 34 wall pixels kept as wire at 5 x 7; 2.54x and 1793 at 9 x 7.
+    # Measured: 1.21x with 34 wall pixels kept as wire at 5 x 7; 2.54x and 525 at 9 x 7
+    # (1793 before the repeat test looked at rivals two and three periods away: wires every
+    # 40 px repeat, and part of the wall drawn as wire now counts as such).
     assert drawn[5][0] < 1.35 and drawn[5][1] < 200 and drawn[5][2] > 0.98
-    assert drawn[9][0] > 2.0 and drawn[9][1] > 1000
+    assert drawn[9][0] > 2.0 and drawn[9][1] > 300
 
 
 def test_the_full_search_keeps_thin_bright_wires_through_the_exposure_map():

@@ -130,13 +130,13 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
             curve = confidence.curve_features(curves, arms_l)
             # The same margin before the scanline optimisation, and repeated texture there.
             if aggregated is not volume:
-                raw, curve["repeated"] = confidence.curves_and_repeats(aggregated, disp_l,
-                                                                       to_grey(left))
+                raw, offsets = confidence.curves_and_rivals(aggregated, disp_l)
                 curve["raw_margin"] = confidence.curve_features(raw, None)["margin"]
             else:
                 curve["raw_margin"] = curve["margin"]
-                curve["repeated"] = confidence.repeated_texture(aggregated, disp_l, curves,
-                                                                to_grey(left))
+                offsets = confidence.rivals(aggregated, disp_l, curves)
+            curve["repeated"], curve[confidence.RIVAL] = confidence.repeats_and_rivals(
+                to_grey(left), offsets)
 
     # Pixels searched no more keep the disparity they hold, and count as consistent.
     held = None if bands is None or bands.held is None else np.isfinite(bands.held)

@@ -14,7 +14,7 @@ from . import confidence, disparity, pyramid
 from .bands import Bands
 from .config import Config
 from .disparity import INVALID_DISPARITY
-from .images import downsample, upsample_nearest
+from .images import downsample
 from .result import MatchResult, timed
 from .tiles import stripe_layout
 
@@ -124,7 +124,7 @@ def coarse_to_fine(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp:
         seconds[name] = seconds.get(name, 0.0) + value
     # A band's cost curve is short: the coarse level's, over the whole range, stand for it
     # (the confidence is calibrated on whole-range curves).
-    curve = {k: upsample_nearest(v, left.shape[:2]) for k, v in coarse.curve.items()}
+    curve = confidence.curve_a_level_up(coarse.curve, left)
     return MatchResult(disparity=result.disparity, labels=result.labels, seconds=seconds,
                        config=result.config, noise_sigma=result.noise_sigma,
                        colour_weight=result.colour_weight, levels=coarse.levels + 1,
@@ -176,8 +176,7 @@ def in_stripes(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp: int
         part = solve(left[first:stop], right[first:stop], max_disp, cfg,
                      None if bands is None else bands.rows(first, stop))
         if part.curve is not None and curve is None:
-            curve = {name: np.empty((height, width), np.float32)
-                     for name in confidence.CURVE_FEATURES}
+            curve = {name: np.empty((height, width), np.float32) for name in part.curve}
         core = slice(core_first - first, core_stop - first)
         disp[core_first:core_stop] = part.disparity[core]
         if part.labels is not None:

@@ -206,14 +206,23 @@ def _offset_of(costs, d1, first, last, rise, rival):
     return best_offset
 
 
+#: The repeats :func:`repeats_at` tells from the rest: a rival 1, 2 or 3 periods away
+#: (a level down the nearest valley can be a period or two off; its lag at the larger view
+#: is then 2 or 4 periods).
+REPEATS_LOOKED_AT = 3
+
+
 @njit(**KERNEL_OPTIONS)
-def repeats_at(grey, offset, radius, reach, similar, classes, out):
+def repeats_at(grey, offset, radius, reach, similar, spread, classes, out):
     """out[y, x] = 1 where the view repeats itself at the pixel's ``offset`` along its
-    row: over the window of rows +-``radius`` and columns +-min(``reach``, |offset|) (at
-    least +-``radius``),
-    the mean absolute difference between the view and itself shifted by |offset| is below
-    ``similar`` x that at half the shift (a repeat's worst phase; about equal on a texture
-    that does not repeat). 0 elsewhere and where ``offset`` is 0."""
+    row, or within ``spread`` pixels of it: over the window of rows +-``radius`` and
+    columns +-min(``reach``, |offset|) (at least +-``radius``), the mean absolute
+    difference between the view and itself shifted by |offset| (+- up to ``spread``) is
+    below ``similar`` x the largest at half a period, for |offset| one, two or three
+    periods (:data:`REPEATS_LOOKED_AT`): a repeat's worst phase, where a texture that does
+    not repeat differs about as much. 0 elsewhere and where ``offset`` is 0. (Half the
+    shift alone, tested before, is itself a repeat when the offset is two periods: such
+    rivals went unseen.)"""
     height, width = grey.shape
     for i in prange(height):  # rows dealt out: only pixels with a rival are looked at
         y = dealt(i, height, classes)
@@ -222,17 +231,26 @@ def repeats_at(grey, offset, radius, reach, similar, classes, out):
             lag = abs(np.int64(offset[y, x]))
             if lag == 0:
                 continue
-            half = max(1, lag // 2)
             columns = max(radius, min(reach, lag))
-            at_lag = 0.0
-            at_half = 0.0
-            for yy in range(max(0, y - radius), min(height, y + radius + 1)):
-                for xx in range(max(lag, x - columns), min(width, x + columns + 1)):
-                    value = grey[yy, xx]
-                    at_lag += abs(value - grey[yy, xx - lag])
-                    at_half += abs(value - grey[yy, xx - half])
-            if at_lag < similar * (at_half + 1.0):
-                out[y, x] = 1.0
+            first = max(lag + spread, x - columns)
+            worst = 0.0
+            for periods in range(1, REPEATS_LOOKED_AT + 1):
+                half = max(1, lag // (2 * periods))
+                if periods > 1 and half == max(1, lag // (2 * periods - 2)):
+                    break  # the same shift as the last: no more to look at
+                at_half = 0.0
+                for yy in range(max(0, y - radius), min(height, y + radius + 1)):
+                    for xx in range(first, min(width, x + columns + 1)):
+                        at_half += abs(grey[yy, xx] - grey[yy, xx - half])
+                worst = max(worst, at_half)
+            for shift in range(max(1, lag - spread), lag + spread + 1):
+                at_lag = 0.0
+                for yy in range(max(0, y - radius), min(height, y + radius + 1)):
+                    for xx in range(first, min(width, x + columns + 1)):
+                        at_lag += abs(grey[yy, xx] - grey[yy, xx - shift])
+                if at_lag < similar * (worst + 1.0):
+                    out[y, x] = 1.0
+                    break
 
 
 @njit(inline="always")
