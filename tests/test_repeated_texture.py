@@ -94,9 +94,11 @@ def test_one_pass_gives_the_curves_and_repeats_of_two(rng):
     volume[:, :, 5::8] *= 0.05  # valleys a period apart
     winners = np.argmin(volume, axis=2).astype(np.int32)
     grey = pair.left.astype(np.float32)
-    curves, repeated = confidence.curves_and_repeats(volume, winners, grey)
+    curves, offsets = confidence.curves_and_rivals(volume, winners)
     for fused, separate in zip(curves, confidence.cost_curves(volume, winners)):
         np.testing.assert_array_equal(fused, separate)
+    np.testing.assert_array_equal(offsets, confidence.rivals(volume, winners, curves))
+    repeated, _ = confidence.repeats_and_rivals(grey, offsets)
     np.testing.assert_array_equal(repeated,
                                   confidence.repeated_texture(volume, winners, curves, grey))
     assert repeated.any()

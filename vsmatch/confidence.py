@@ -148,14 +148,6 @@ def rivals(aggregated: np.ndarray, winners: np.ndarray,
     return offsets
 
 
-def curves_and_repeats(aggregated: np.ndarray, winners: np.ndarray, grey: np.ndarray
-                       ) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
-    """:func:`cost_curves` of the whole-range ``aggregated`` costs and
-    :func:`repeated_texture`, the curves read once."""
-    curves, offsets = curves_and_rivals(aggregated, winners)
-    return curves, _repeats(grey, offsets)
-
-
 def curves_and_rivals(aggregated: np.ndarray, winners: np.ndarray
                       ) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
     """:func:`cost_curves` of the whole-range ``aggregated`` costs and :func:`rivals`, the

@@ -233,24 +233,29 @@ def repeats_at(grey, offset, radius, reach, similar, spread, classes, out):
                 continue
             columns = max(radius, min(reach, lag))
             first = max(lag + spread, x - columns)
+            rows = (max(0, y - radius), min(height, y + radius + 1))
+            cols = (first, min(width, x + columns + 1))
             worst = 0.0
             for periods in range(1, REPEATS_LOOKED_AT + 1):
                 half = max(1, lag // (2 * periods))
                 if periods > 1 and half == max(1, lag // (2 * periods - 2)):
                     break  # the same shift as the last: no more to look at
-                at_half = 0.0
-                for yy in range(max(0, y - radius), min(height, y + radius + 1)):
-                    for xx in range(first, min(width, x + columns + 1)):
-                        at_half += abs(grey[yy, xx] - grey[yy, xx - half])
-                worst = max(worst, at_half)
+                worst = max(worst, _shifted_difference(grey, rows, cols, half))
             for shift in range(max(1, lag - spread), lag + spread + 1):
-                at_lag = 0.0
-                for yy in range(max(0, y - radius), min(height, y + radius + 1)):
-                    for xx in range(first, min(width, x + columns + 1)):
-                        at_lag += abs(grey[yy, xx] - grey[yy, xx - shift])
-                if at_lag < similar * (worst + 1.0):
+                if _shifted_difference(grey, rows, cols, shift) < similar * (worst + 1.0):
                     out[y, x] = 1.0
                     break
+
+
+@njit(inline="always")
+def _shifted_difference(grey, rows, cols, shift):
+    """The summed absolute difference between ``grey`` and itself ``shift`` columns to the
+    left over the window of ``rows`` and ``cols`` (first, stop each)."""
+    total = 0.0
+    for yy in range(rows[0], rows[1]):
+        for xx in range(cols[0], cols[1]):
+            total += abs(grey[yy, xx] - grey[yy, xx - shift])
+    return total
 
 
 @njit(inline="always")
