@@ -123,8 +123,10 @@ def coarse_to_fine(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp:
     for name, value in result.seconds.items():
         seconds[name] = seconds.get(name, 0.0) + value
     # A band's cost curve is short: the coarse level's, over the whole range, stand for it
-    # (the confidence is calibrated on whole-range curves).
-    curve = confidence.curve_a_level_up(coarse.curve, left)
+    # (the confidence is calibrated on whole-range curves); its repeats are tested again
+    # on this level's view, counted with the confidence.
+    with timed(seconds, "confidence"):
+        curve = confidence.curve_a_level_up(coarse.curve, left)
     return MatchResult(disparity=result.disparity, labels=result.labels, seconds=seconds,
                        config=result.config, noise_sigma=result.noise_sigma,
                        colour_weight=result.colour_weight, levels=coarse.levels + 1,
