@@ -49,8 +49,9 @@ def test_the_view_repeats_itself_at_its_period_only(rng):
     out = np.empty((30, 120), np.float32)
     for image, offset, expected in ((stripes, period, 1.0), (stripes, -2 * period, 1.0),
                                     (random, period, 0.0), (stripes, 0, 0.0)):
-        repeats_at(image, np.full((30, 120), offset, np.int32), confidence.REPEAT_RADIUS,
-                   confidence.REPEAT_REACH, confidence.REPEAT_SIMILAR, 0, 2, out)
+        repeats_at(image, np.full((30, 120), offset, np.int32), 1,
+                   confidence.REPEAT_RADIUS, confidence.REPEAT_REACH,
+                   confidence.REPEAT_SIMILAR, 0, 2, out)
         assert np.mean(out[5:-5, 20:-20] == expected) > 0.95, (offset, expected)
 
 
@@ -67,10 +68,29 @@ def test_the_view_repeats_itself_two_and_three_periods_away(rng):
     for image, offset, expected in ((stripes, period, 1.0), (stripes, 2 * period, 1.0),
                                     (stripes, -3 * period, 1.0), (random, 2 * period, 0.0),
                                     (random, 3 * period, 0.0)):
-        repeats_at(np.ascontiguousarray(image), np.full((30, 160), offset, np.int32),
+        repeats_at(np.ascontiguousarray(image), np.full((30, 160), offset, np.int32), 1,
                    confidence.REPEAT_RADIUS, confidence.REPEAT_REACH,
                    confidence.REPEAT_SIMILAR, 0, 2, out)
         assert np.mean(out[5:-5, 30:-30] == expected) > 0.95, (offset, expected)
+
+
+def test_the_repeat_test_on_every_other_pixel_is_the_full_maps_every_other_pixel(rng):
+    """``step`` 2 (a level's pixels on the larger view, each output row holding work for
+    the threads) gives what the test at every pixel gives there."""
+    period = 6
+    stripes = np.where(np.arange(161) % period < period // 2, 190.0, 70.0).astype(np.float32)
+    image = np.repeat(stripes[None, :], 41, 0) + rng.normal(0.0, 20.0, (41, 161))
+    image[:, 80:] = rng.random((41, 81)) * 255  # half of it does not repeat
+    grey = np.clip(image, 0, 255).astype(np.float32)
+    offsets = rng.choice([0, period, 2 * period, -period, 5], size=(41, 161)).astype(np.int32)
+    full = np.empty((41, 161), np.float32)
+    repeats_at(grey, offsets, 1, confidence.REPEAT_RADIUS, confidence.REPEAT_REACH,
+               confidence.REPEAT_SIMILAR, 1, 2, full)
+    half = np.empty((21, 81), np.float32)
+    repeats_at(grey, np.ascontiguousarray(offsets[::2, ::2]), 2, confidence.REPEAT_RADIUS,
+               confidence.REPEAT_REACH, confidence.REPEAT_SIMILAR, 1, 2, half)
+    assert 0.1 < full.mean() < 0.9  # both kinds of pixel are there
+    np.testing.assert_array_equal(half, full[::2, ::2])
 
 
 def test_fins_matched_a_level_down_are_not_trusted_a_period_or_two_off():

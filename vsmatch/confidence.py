@@ -180,22 +180,23 @@ def curve_a_level_up(curve: dict[str, np.ndarray], left: np.ndarray) -> dict[str
         return up
     # Looked at on the level's own pixels (every other row and column of the larger view,
     # each standing for its 2 x 2 block, as every curve map does): a quarter of the work.
-    lag = np.zeros(shape, np.int32)
-    lag[::2, ::2] = np.rint(up[RIVAL][::2, ::2] * np.float32(shape[1]))
-    lag[up["repeated"] > 0] = 0  # a repeat a level down stays one: not looked at again
     # A lag doubled is the larger view's within a pixel.
-    repeats = _repeats(grey_levels(left), lag, spread=1)[::2, ::2]
+    lag = np.rint(up[RIVAL][::2, ::2] * np.float32(shape[1])).astype(np.int32)
+    lag[up["repeated"][::2, ::2] > 0] = 0  # a repeat a level down stays one: not looked at again
+    repeats = _repeats(grey_levels(left), lag, spread=1, step=2)
     up["repeated"] = np.maximum(up["repeated"], upsample_nearest(repeats, shape))
     return up
 
 
-def _repeats(grey: np.ndarray, offsets: np.ndarray, spread: int = 0) -> np.ndarray:
-    """1 where the view repeats itself at each pixel's rival ``offsets``, or within
-    ``spread`` pixels of them (float32)."""
+def _repeats(grey: np.ndarray, offsets: np.ndarray, spread: int = 0, step: int = 1
+             ) -> np.ndarray:
+    """1 where the view (``grey`` levels) repeats itself at each
+    pixel's rival ``offsets``, or within ``spread`` pixels of them (float32); with ``step``
+    2, ``offsets`` are those of every other row and column of the view, and so is the map."""
     repeated = np.empty(offsets.shape, np.float32)
     repeats_at(np.ascontiguousarray(grey, dtype=np.float32),
-               np.ascontiguousarray(offsets, dtype=np.int32), REPEAT_RADIUS, REPEAT_REACH,
-               REPEAT_SIMILAR, spread, thread_classes(), repeated)
+               np.ascontiguousarray(offsets, dtype=np.int32), step, REPEAT_RADIUS,
+               REPEAT_REACH, REPEAT_SIMILAR, spread, thread_classes(), repeated)
     return repeated
 
 

@@ -213,24 +213,28 @@ REPEATS_LOOKED_AT = 3
 
 
 @njit(**KERNEL_OPTIONS)
-def repeats_at(grey, offset, radius, reach, similar, spread, classes, out):
-    """out[y, x] = 1 where the view repeats itself at the pixel's ``offset`` along its
-    row, or within ``spread`` pixels of it: over the window of rows +-``radius`` and
-    columns +-min(``reach``, |offset|) (at least +-``radius``), the mean absolute
-    difference between the view and itself shifted by |offset| (+- up to ``spread``) is
-    below ``similar`` x the largest at half a period, for |offset| one, two or three
-    periods (:data:`REPEATS_LOOKED_AT`): a repeat's worst phase, where a texture that does
-    not repeat differs about as much. 0 elsewhere and where ``offset`` is 0. (Half the
-    shift alone, tested before, is itself a repeat when the offset is two periods: such
-    rivals went unseen.)"""
+def repeats_at(grey, offset, step, radius, reach, similar, spread, classes, out):
+    """out[i, j] = 1 where the view ``grey`` repeats itself at ``offset[i, j]``
+    along its row, or within ``spread`` pixels of it, at pixel (``step`` i, ``step`` j):
+    over the window of rows +-``radius`` and columns +-min(``reach``, |offset|) (at least
+    +-``radius``), the mean absolute difference between the view and itself shifted by
+    |offset| (+- up to ``spread``) is below ``similar`` x the largest at half a period, for
+    |offset| one, two or three periods (:data:`REPEATS_LOOKED_AT`): a repeat's worst phase,
+    where a texture that does not repeat differs about as much. 0 elsewhere and where
+    ``offset`` is 0. (Half the shift alone, tested before, is itself a repeat when the
+    offset is two periods: such rivals went unseen.) ``step`` 2 looks at every other row
+    and column only (a level's pixels on the larger view): each output row has work, so
+    the threads share it."""
     height, width = grey.shape
-    for i in prange(height):  # rows dealt out: only pixels with a rival are looked at
-        y = dealt(i, height, classes)
-        for x in range(width):
-            out[y, x] = 0.0
-            lag = abs(np.int64(offset[y, x]))
+    for i in prange(out.shape[0]):  # rows dealt out: only pixels with a rival are looked at
+        row = dealt(i, out.shape[0], classes)
+        y = row * step
+        for j in range(out.shape[1]):
+            out[row, j] = 0.0
+            lag = abs(np.int64(offset[row, j]))
             if lag == 0:
                 continue
+            x = j * step
             columns = max(radius, min(reach, lag))
             first = max(lag + spread, x - columns)
             rows = (max(0, y - radius), min(height, y + radius + 1))
@@ -243,14 +247,15 @@ def repeats_at(grey, offset, radius, reach, similar, spread, classes, out):
                 worst = max(worst, _shifted_difference(grey, rows, cols, half))
             for shift in range(max(1, lag - spread), lag + spread + 1):
                 if _shifted_difference(grey, rows, cols, shift) < similar * (worst + 1.0):
-                    out[y, x] = 1.0
+                    out[row, j] = 1.0
                     break
 
 
 @njit(inline="always")
 def _shifted_difference(grey, rows, cols, shift):
     """The summed absolute difference between ``grey`` and itself ``shift`` columns to the
-    left over the window of ``rows`` and ``cols`` (first, stop each)."""
+    left over the window of ``rows`` and ``cols`` (first, stop each). (Whole-number sums
+    of uint8 levels, or float32 ones, took as long: the window's rows are short.)"""
     total = 0.0
     for yy in range(rows[0], rows[1]):
         for xx in range(cols[0], cols[1]):
