@@ -10,7 +10,7 @@ import pytest
 
 import vsmatch
 from vsmatch import confidence, datasets, evaluation, metrics, photometric, pipeline, planes
-from vsmatch._kernels.planes import N_MOMENTS, cut_arms_at_jumps, fit_region_planes
+from vsmatch._kernels.planes import cut_arms_at_jumps, fit_region_planes
 from vsmatch.config import load_config, config_from_dict
 from vsmatch.disparity import MISMATCHED, VALID
 from vsmatch.refinement import subpixel
@@ -99,7 +99,7 @@ def test_region_planes_recover_an_exact_plane():
     arms = np.stack([xs, w - 1 - xs, ys, h - 1 - ys]).astype(np.uint8)
     out, spread = np.empty((h, w), np.float32), np.empty((h, w), np.float32)
     fit_region_planes(disp, np.ones((h, w), np.float32), arms, np.float32(0.2),
-                      np.float32(1.0), np.empty((h, w, N_MOMENTS), np.float32), out, spread)
+                      np.float32(1.0), planes.moment_blocks((h, w)), out, spread)
     np.testing.assert_allclose(out, disp, atol=2e-3)
     assert spread.max() < 0.05
 

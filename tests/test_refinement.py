@@ -106,7 +106,8 @@ def test_region_planes_match_reference(rng):
     a solve written as selects so that it vectorises) gives the bytes of the moments
     summed in NumPy and solved a pixel at a time with branches: empty, too light, one-axis
     and full regions alike, a width that is not a whole number of column blocks."""
-    from vsmatch._kernels.planes import COLUMN_BLOCK, N_MOMENTS, fit_region_planes
+    from vsmatch._kernels.planes import COLUMN_BLOCK, fit_region_planes
+    from vsmatch.planes import moment_blocks
     from vsmatch.aggregation import keep_arms_inside
 
     height, width = 23, 2 * COLUMN_BLOCK + 5
@@ -119,7 +120,7 @@ def test_region_planes_match_reference(rng):
     keep_arms_inside(arms)
     got = np.empty((height, width), np.float32), np.empty((height, width), np.float32)
     fit_region_planes(disp, weight, arms, np.float32(0.5), np.float32(1.0),
-                      np.empty((height, width, N_MOMENTS), np.float32), *got)
+                      moment_blocks((height, width)), *got)
     sums = reference.region_moment_sums(reference.plane_moments(disp, weight), arms)
     want = reference.plane_values(sums, 0.5, 1.0)
     for g, w in zip(got, want):

@@ -18,7 +18,8 @@ import dataclasses
 
 import numpy as np
 
-from ._kernels.planes import N_MOMENTS, cut_arms_at_jumps, fit_region_planes, take_planes
+from ._kernels.planes import (COLUMN_BLOCK, N_MOMENTS, cut_arms_at_jumps, fit_region_planes,
+                              take_planes)
 from .aggregation import keep_arms_inside
 from .config import ArmsConfig, PlanesConfig
 from .disparity import VALID
@@ -69,6 +70,15 @@ def _block_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray,
     return region_planes(disp, kept, arms, cfg.iterations, cfg.min_share, cfg.inlier)
 
 
+def moment_blocks(shape: tuple[int, int]) -> np.ndarray:
+    """Room for ``fit_region_planes``' row sums of an image of ``shape`` (H, W): float32
+    (blocks, H, :data:`COLUMN_BLOCK`, :data:`N_MOMENTS`), a block a :data:`COLUMN_BLOCK`
+    columns (the last one's columns past the image unused)."""
+    height, width = shape
+    blocks = (width + COLUMN_BLOCK - 1) // COLUMN_BLOCK
+    return np.empty((blocks, height, COLUMN_BLOCK, N_MOMENTS), np.float32)
+
+
 def region_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, iterations: int,
                   min_share: float, inlier: float) -> tuple[np.ndarray, np.ndarray]:
     """Each pixel's cross region's least-squares plane at the pixel, through the region's
@@ -76,7 +86,7 @@ def region_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, iteratio
     of the region); ``iterations`` fits, each on the kept pixels within ``inlier`` of the
     last plane."""
     weight = kept.astype(np.float32)
-    scratch = np.empty(disp.shape + (N_MOMENTS,), np.float32)
+    scratch = moment_blocks(disp.shape)
     plane = np.empty(disp.shape, np.float32)
     spread = np.empty(disp.shape, np.float32)
     for fit in range(iterations):
