@@ -114,6 +114,9 @@ def lr_labels(dl, dr, n_disp, tol):
     for y in range(h):
         for x in range(w):
             d = dl[y, x]
+            if d < 0:  # no candidate in the pixel's band
+                out[y, x] = 1
+                continue
             if x - d >= 0 and abs(d - dr[y, x - d]) <= tol:
                 continue
             passes = any(abs(dd - dr[y, x - dd]) <= tol for dd in range(min(n_disp, x + 1)))

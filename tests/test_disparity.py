@@ -36,6 +36,22 @@ def test_left_right_check_matches_reference(rng):
         np.testing.assert_array_equal(got, reference.lr_labels(dl, dr, 5, tol))
 
 
+def test_left_right_check_matches_reference_with_bands(rng):
+    """Right pixels pointing past either end, or offered nothing (NO_DISPARITY), left
+    pixels without a candidate (< 0), and right disparities beyond the range checked."""
+    from vsmatch._kernels.disparity import NO_DISPARITY
+
+    dl = rng.integers(-1, 30, size=(20, 60)).astype(np.int32)
+    dr = rng.integers(0, 40, size=(20, 60)).astype(np.int32)
+    dr[rng.random(dr.shape) < 0.1] = NO_DISPARITY
+    labels = set()
+    for n_disp, tol in ((30, 0), (30, 1), (12, 2), (64, 0)):
+        got = disparity.left_right_check(dl, dr, n_disp=n_disp, tolerance=tol)
+        np.testing.assert_array_equal(got, reference.lr_labels(dl, dr, n_disp, tol))
+        labels |= set(np.unique(got).tolist())
+    assert labels == {disparity.VALID, disparity.OCCLUDED, disparity.MISMATCHED}
+
+
 def test_left_right_check_accepts_a_consistent_pair():
     dl = np.full((3, 10), 2, np.int32)
     dr = np.full((3, 10), 2, np.int32)

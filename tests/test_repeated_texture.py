@@ -16,6 +16,11 @@ from figures import hold
 DEPTH, COLUMN = 24, 29  # curves long enough that every candidate is in view at COLUMN
 
 
+def grey_levels(image):
+    """A float picture as the view's grey levels the repeat test reads (uint8)."""
+    return np.clip(np.rint(image), 0, 255).astype(np.uint8)
+
+
 def offsets_of(*curves, winners):
     volume = np.full((1, COLUMN + 1, DEPTH), 2.0, np.float32)
     volume[0, COLUMN - len(curves) + 1:] = np.array(curves, np.float32)
@@ -49,7 +54,7 @@ def test_the_view_repeats_itself_at_its_period_only(rng):
     out = np.empty((30, 120), np.float32)
     for image, offset, expected in ((stripes, period, 1.0), (stripes, -2 * period, 1.0),
                                     (random, period, 0.0), (stripes, 0, 0.0)):
-        repeats_at(image, np.full((30, 120), offset, np.int32), 1,
+        repeats_at(grey_levels(image), np.full((30, 120), offset, np.int32), 1,
                    confidence.REPEAT_RADIUS, confidence.REPEAT_REACH,
                    confidence.REPEAT_SIMILAR, 0, 2, out)
         assert np.mean(out[5:-5, 20:-20] == expected) > 0.95, (offset, expected)
@@ -68,7 +73,7 @@ def test_the_view_repeats_itself_two_and_three_periods_away(rng):
     for image, offset, expected in ((stripes, period, 1.0), (stripes, 2 * period, 1.0),
                                     (stripes, -3 * period, 1.0), (random, 2 * period, 0.0),
                                     (random, 3 * period, 0.0)):
-        repeats_at(np.ascontiguousarray(image), np.full((30, 160), offset, np.int32), 1,
+        repeats_at(grey_levels(image), np.full((30, 160), offset, np.int32), 1,
                    confidence.REPEAT_RADIUS, confidence.REPEAT_REACH,
                    confidence.REPEAT_SIMILAR, 0, 2, out)
         assert np.mean(out[5:-5, 30:-30] == expected) > 0.95, (offset, expected)
@@ -81,7 +86,7 @@ def test_the_repeat_test_on_every_other_pixel_is_the_full_maps_every_other_pixel
     stripes = np.where(np.arange(161) % period < period // 2, 190.0, 70.0).astype(np.float32)
     image = np.repeat(stripes[None, :], 41, 0) + rng.normal(0.0, 20.0, (41, 161))
     image[:, 80:] = rng.random((41, 81)) * 255  # half of it does not repeat
-    grey = np.clip(image, 0, 255).astype(np.float32)
+    grey = grey_levels(image)
     offsets = rng.choice([0, period, 2 * period, -period, 5], size=(41, 161)).astype(np.int32)
     full = np.empty((41, 161), np.float32)
     repeats_at(grey, offsets, 1, confidence.REPEAT_RADIUS, confidence.REPEAT_REACH,

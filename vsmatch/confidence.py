@@ -190,11 +190,12 @@ def curve_a_level_up(curve: dict[str, np.ndarray], left: np.ndarray) -> dict[str
 
 def _repeats(grey: np.ndarray, offsets: np.ndarray, spread: int = 0, step: int = 1
              ) -> np.ndarray:
-    """1 where the view (``grey`` levels) repeats itself at each
+    """1 where the view (``grey`` levels, whole numbers 0-255) repeats itself at each
     pixel's rival ``offsets``, or within ``spread`` pixels of them (float32); with ``step``
-    2, ``offsets`` are those of every other row and column of the view, and so is the map."""
+    2, ``offsets`` are those of every other row and column of the view, and so is the
+    map."""
     repeated = np.empty(offsets.shape, np.float32)
-    repeats_at(np.ascontiguousarray(grey, dtype=np.float32),
+    repeats_at(np.ascontiguousarray(grey, dtype=np.uint8),
                np.ascontiguousarray(offsets, dtype=np.int32), step, REPEAT_RADIUS,
                REPEAT_REACH, REPEAT_SIMILAR, spread, thread_classes(), repeated)
     return repeated

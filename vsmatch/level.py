@@ -17,7 +17,7 @@ from . import (aggregation, confidence, cost, disparity, noise, optimization, re
 from .bands import Bands
 from .config import Config, CostConfig
 from .disparity import INVALID_DISPARITY
-from .images import channel_planes, to_grey
+from .images import channel_planes, grey_levels, to_grey
 from .result import Learnt, MatchResult, learn, timed
 
 
@@ -136,7 +136,7 @@ def solve(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
                 curve["raw_margin"] = curve["margin"]
                 offsets = confidence.rivals(aggregated, disp_l, curves)
             curve["repeated"], curve[confidence.RIVAL] = confidence.repeats_and_rivals(
-                to_grey(left), offsets)
+                grey_levels(left), offsets)
 
     # Pixels searched no more keep the disparity they hold, and count as consistent.
     held = None if bands is None or bands.held is None else np.isfinite(bands.held)

@@ -3,6 +3,7 @@ from numba import njit, prange
 
 from . import KERNEL_OPTIONS, ROW_OPTIONS
 from .rows import dealt
+from .views import borrowed
 from .sobel import mirrored_index, sobel_at
 
 
@@ -212,54 +213,67 @@ def _offset_of(costs, d1, first, last, rise, rival):
 REPEATS_LOOKED_AT = 3
 
 
+@njit(**ROW_OPTIONS)
+def _repeats_of_row(grey, offset, step, radius, reach, similar, spread, out, row):
+    """:func:`repeats_at` of output row ``row``."""
+    grey, offset, out = borrowed(grey), borrowed(offset), borrowed(out)
+    height, width = grey.shape
+    y = row * step
+    for j in range(out.shape[1]):
+        out[row, j] = 0.0
+        lag = abs(np.int64(offset[row, j]))
+        if lag == 0:
+            continue
+        x = j * step
+        columns = max(radius, min(reach, lag))
+        first = max(lag + spread, x - columns)
+        rows = (max(0, y - radius), min(height, y + radius + 1))
+        cols = (first, min(width, x + columns + 1))
+        worst = np.int32(0)
+        for periods in range(1, REPEATS_LOOKED_AT + 1):
+            half = max(1, lag // (2 * periods))
+            if periods > 1 and half == max(1, lag // (2 * periods - 2)):
+                break  # the same shift as the last: no more to look at
+            worst = max(worst, _shifted_difference(grey, rows, cols, half))
+        for shift in range(max(1, lag - spread), lag + spread + 1):
+            if _shifted_difference(grey, rows, cols, shift) < similar * (worst + 1.0):
+                out[row, j] = 1.0
+                break
+
+
 @njit(**KERNEL_OPTIONS)
 def repeats_at(grey, offset, step, radius, reach, similar, spread, classes, out):
-    """out[i, j] = 1 where the view ``grey`` repeats itself at ``offset[i, j]``
-    along its row, or within ``spread`` pixels of it, at pixel (``step`` i, ``step`` j):
-    over the window of rows +-``radius`` and columns +-min(``reach``, |offset|) (at least
-    +-``radius``), the mean absolute difference between the view and itself shifted by
-    |offset| (+- up to ``spread``) is below ``similar`` x the largest at half a period, for
-    |offset| one, two or three periods (:data:`REPEATS_LOOKED_AT`): a repeat's worst phase,
-    where a texture that does not repeat differs about as much. 0 elsewhere and where
-    ``offset`` is 0. (Half the shift alone, tested before, is itself a repeat when the
-    offset is two periods: such rivals went unseen.) ``step`` 2 looks at every other row
-    and column only (a level's pixels on the larger view): each output row has work, so
-    the threads share it."""
-    height, width = grey.shape
+    """out[i, j] = 1 where the view's ``grey`` levels (uint8) repeat themselves at
+    ``offset[i, j]`` along the row, or within ``spread`` pixels of it, at pixel (``step``
+    i, ``step`` j): over the window of rows +-``radius`` and columns +-min(``reach``,
+    |offset|) (at least +-``radius``), the mean absolute difference between the view and
+    itself shifted by |offset| (+- up to ``spread``) is below ``similar`` x the largest at
+    half a period, for |offset| one, two or three periods (:data:`REPEATS_LOOKED_AT`): a
+    repeat's worst phase, where a texture that does not repeat differs about as much. 0
+    elsewhere and where ``offset`` is 0. (Half the shift alone, tested before, is itself a
+    repeat when the offset is two periods: such rivals went unseen.) ``step`` 2 looks at
+    every other row and column only (a level's pixels on the larger view): each output row
+    has work, so the threads share it."""
     for i in prange(out.shape[0]):  # rows dealt out: only pixels with a rival are looked at
-        row = dealt(i, out.shape[0], classes)
-        y = row * step
-        for j in range(out.shape[1]):
-            out[row, j] = 0.0
-            lag = abs(np.int64(offset[row, j]))
-            if lag == 0:
-                continue
-            x = j * step
-            columns = max(radius, min(reach, lag))
-            first = max(lag + spread, x - columns)
-            rows = (max(0, y - radius), min(height, y + radius + 1))
-            cols = (first, min(width, x + columns + 1))
-            worst = 0.0
-            for periods in range(1, REPEATS_LOOKED_AT + 1):
-                half = max(1, lag // (2 * periods))
-                if periods > 1 and half == max(1, lag // (2 * periods - 2)):
-                    break  # the same shift as the last: no more to look at
-                worst = max(worst, _shifted_difference(grey, rows, cols, half))
-            for shift in range(max(1, lag - spread), lag + spread + 1):
-                if _shifted_difference(grey, rows, cols, shift) < similar * (worst + 1.0):
-                    out[row, j] = 1.0
-                    break
+        _repeats_of_row(grey, offset, np.int64(step), radius, reach, similar, spread, out,
+                        dealt(i, out.shape[0], classes))
 
 
 @njit(inline="always")
 def _shifted_difference(grey, rows, cols, shift):
-    """The summed absolute difference between ``grey`` and itself ``shift`` columns to the
-    left over the window of ``rows`` and ``cols`` (first, stop each). (Whole-number sums
-    of uint8 levels, or float32 ones, took as long: the window's rows are short.)"""
-    total = 0.0
+    """The summed absolute difference between ``grey`` (uint8, borrowed) and itself
+    ``shift`` columns to the left over the window of ``rows`` and ``cols`` (first, stop
+    each; the first column at least ``shift``). Whole numbers, so the sums are exact in any
+    order and vectorise, and read through views indexed from 0: as one float64 sum indexed
+    by ``xx - shift`` (a wrap-around test each), an addition's latency a pixel held the
+    repeat test (4 % of `fast`)."""
+    total = np.int32(0)
+    count = cols[1] - cols[0]
     for yy in range(rows[0], rows[1]):
-        for xx in range(cols[0], cols[1]):
-            total += abs(grey[yy, xx] - grey[yy, xx - shift])
+        line = grey[yy]
+        here, there = line[cols[0]:], line[cols[0] - shift:]
+        for i in range(count):
+            total += abs(np.int32(here[i]) - np.int32(there[i]))
     return total
 
 

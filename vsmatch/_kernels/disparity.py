@@ -126,25 +126,39 @@ def winner_takes_all_both(volume, lo, count, out_l, out_r, exclude, out_best, ou
                      n_disp, np.int64(y), best_r, best_rd)
 
 
+@njit(**ROW_OPTIONS)
+def _check_row(disp_l, disp_r, n_disp, tolerance, labels, hit, y):
+    """:func:`left_right_check` of row ``y`` (``hit``: room for the row's flags)."""
+    width = disp_l.shape[1]
+    # A left pixel x is MISMATCHED when some right pixel xr = x - dd (0 <= dd < n_disp)
+    # has |dd - d_R(xr)| <= tolerance, i.e. points within the tolerance of x: each right
+    # pixel marks the left pixels it points at, once, where scanning the candidates of
+    # every rejected pixel took up to n_disp steps a pixel (3 % of `fast`).
+    hit[:] = False
+    for xr in range(width):
+        target = np.int64(xr) + np.int64(disp_r[y, xr])
+        first = max(max(target - tolerance, np.int64(xr)), np.int64(0))
+        stop = min(min(target + tolerance + 1, np.int64(xr) + n_disp), np.int64(width))
+        for x in range(first, stop):
+            hit[x] = True
+    for x in range(width):
+        d = disp_l[y, x]
+        if d < 0:  # no candidate in the pixel's band
+            labels[y, x] = OCCLUDED
+        elif x - d >= 0 and abs(d - disp_r[y, x - d]) <= tolerance:
+            labels[y, x] = VALID
+        else:
+            labels[y, x] = MISMATCHED if hit[x] else OCCLUDED
+
+
 @njit(**KERNEL_OPTIONS)
 def left_right_check(disp_l, disp_r, n_disp, tolerance, labels):
     """Label each left pixel VALID, OCCLUDED (no disparity would pass) or MISMATCHED."""
     height, width = disp_l.shape
     for y in prange(height):
-        for x in range(width):
-            d = disp_l[y, x]
-            if d < 0:  # no candidate in the pixel's band
-                labels[y, x] = OCCLUDED
-                continue
-            if x - d >= 0 and abs(d - disp_r[y, x - d]) <= tolerance:
-                labels[y, x] = VALID
-                continue
-            label = OCCLUDED
-            for dd in range(min(n_disp, x + 1)):
-                if abs(dd - disp_r[y, x - dd]) <= tolerance:
-                    label = MISMATCHED
-                    break
-            labels[y, x] = label
+        hit = np.empty(width, np.bool_)
+        _check_row(disp_l, disp_r, np.int64(n_disp), np.int64(tolerance), labels, hit,
+                   np.int64(y))
 
 
 @njit(**ROW_OPTIONS)
