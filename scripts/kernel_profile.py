@@ -184,8 +184,9 @@ def main() -> None:
         env = {**os.environ, "NUMBA_CACHE_DIR": str(folder / "cache")}
         if args.data_root:
             env["VSMATCH_DATA"] = args.data_root
+        # The matches go on a little longer than the recording, which ends first.
         child = subprocess.Popen([sys.executable, __file__, args.config, "--threads",
-                                  str(args.threads), "--seconds", str(args.seconds),
+                                  str(args.threads), "--seconds", str(args.seconds + 5),
                                   "--child", str(ready), str(folder)], env=env)
         while not ready.exists():
             if child.poll() is not None:
