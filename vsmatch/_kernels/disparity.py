@@ -137,7 +137,7 @@ def _check_row(disp_l, disp_r, n_disp, tolerance, labels, hit, y):
     hit[:] = False
     for xr in range(width):
         target = np.int64(xr) + np.int64(disp_r[y, xr])
-        first = max(max(target - tolerance, np.int64(xr)), np.int64(0))
+        first = max(target - tolerance, np.int64(xr))  # dd = x - xr >= 0
         stop = min(min(target + tolerance + 1, np.int64(xr) + n_disp), np.int64(width))
         for x in range(first, stop):
             hit[x] = True

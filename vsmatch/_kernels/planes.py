@@ -145,7 +145,7 @@ def _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread, b
     # added in a buffer of its own: read and written in one array (row y + 1 from row y),
     # the loop stayed scalar (a third of the column pass).
     line = n * N_MOMENTS
-    rows = borrowed(scratch[block]).reshape(-1)
+    rows = scratch[block].reshape(-1)  # a view of a borrowed array: no count either
     running[:line] = 0.0
     flat[:line] = 0.0
     for y in range(height):
