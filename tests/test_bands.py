@@ -60,3 +60,15 @@ def test_bands_from_coarse_are_the_numpy_steps(coarse_shape, shape, with_labels)
     assert found.width == min(cfg.max_band, max_disp + 1) and found.n_disp == max_disp + 1
     if coarse.size > 100:  # both cases were met
         assert (count == cfg.max_band).any() and (count == 0).any()
+
+
+@pytest.mark.parametrize("shape", [(40, 60), (39, 59), (40, 59), (1, 1), (2, 3)])
+@pytest.mark.parametrize("dtype", [np.uint8, np.int32, np.float32])
+def test_upsample_nearest_repeats_each_pixel_over_its_block(rng, shape, dtype):
+    """The levels' maps taken a level up (the doubled kernel writes each pixel twice along a
+    row): every fine pixel holds its coarse pixel, the odd last row and column too, planes
+    along the first axis alike."""
+    coarse = (rng.random((3, (shape[0] + 1) // 2, (shape[1] + 1) // 2)) * 200).astype(dtype)
+    want = np.repeat(np.repeat(coarse, 2, axis=1), 2, axis=2)[:, :shape[0], :shape[1]]
+    np.testing.assert_array_equal(upsample_nearest(coarse, shape), want)
+    np.testing.assert_array_equal(upsample_nearest(coarse[0], shape), want[0])

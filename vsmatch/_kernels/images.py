@@ -6,16 +6,23 @@ from . import SERIAL_OPTIONS
 @njit(**SERIAL_OPTIONS)
 def doubled(planes, out):
     """``out[k, y, x]`` = ``planes[k, y // 2, x // 2]``: each plane twice as tall and wide,
-    cut to ``out``'s size (at most twice the planes'). One core: a copy as fast as memory
-    takes it (8x OpenCV's nearest resize by 2 on a 718 x 496 view, 0.14 against 1.14 ms;
-    on two threads 0.13), which compiles in a quarter of a parallel kernel's time."""
+    cut to ``out``'s size (at most twice the planes'). One core, which compiles in a quarter
+    of a parallel kernel's time: six float32 planes of 718 x 496 in 0.11 ms (0.50 with a
+    gather a vector; OpenCV's nearest resize by 2 took 1.14 ms a plane)."""
     count, height, width = out.shape
+    pairs = width // 2
     for k in range(count):
         for y in range(height):
             source = planes[k, y // 2]
             target = out[k, y]
-            for x in range(width):
-                target[x] = source[x // 2]
+            # Each source pixel written twice, side by side: with target[x] = source[x //
+            # 2], LLVM read the source with a gather a vector (three quarters of the time).
+            for i in range(pairs):
+                value = source[i]
+                target[2 * i] = value
+                target[2 * i + 1] = value
+            if width % 2:
+                target[width - 1] = source[pairs]
 
 
 @njit(**SERIAL_OPTIONS)
