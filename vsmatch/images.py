@@ -111,10 +111,12 @@ def plane_blur(planes: np.ndarray, box: int) -> np.ndarray:
 def mirrored_lines(length: int, box: int) -> np.ndarray:
     """The line each of a ``box`` window's positions reads, for windows starting ``box //
     2`` before each of ``length`` lines: OpenCV's mirror about the edge lines
-    (BORDER_REFLECT_101), again and again where the window is wider than the image."""
+    (BORDER_REFLECT_101), again and again where the window is wider than the image.
+    Unsigned: the box kernels' reads through them then take no wrap-around test (a signed
+    index is tested for a negative value at each read; half the plane blur's time)."""
     at = np.arange(length + box - 1) - box // 2
     if length == 1:
-        return np.zeros_like(at)
+        return np.zeros(at.shape, np.uint64)
     period = 2 * (length - 1)
     at = np.abs(at) % period
-    return np.where(at < length, at, period - at)
+    return np.where(at < length, at, period - at).astype(np.uint64)

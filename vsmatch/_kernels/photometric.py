@@ -18,27 +18,27 @@ def _box_mean_of_band(volume, box, rows_at, columns_at, out, band):
     scale = 1.0 / (box * box)
     rows = np.zeros((width, depth))  # each column's sums over the window's rows
     for k in range(box):
-        src = volume[np.uint64(rows_at[first + k])]
+        src = volume[rows_at[first + k]]
         for x in range(width):
             for d in range(depth):
                 rows[x, d] += src[x, d]
     window = np.empty(depth)
     for y in range(first, stop):
         if y > first:
-            enter = volume[np.uint64(rows_at[y + box - 1])]
-            leave = volume[np.uint64(rows_at[y - 1])]
+            enter = volume[rows_at[y + box - 1]]
+            leave = volume[rows_at[y - 1]]
             for x in range(width):
                 for d in range(depth):
                     rows[x, d] += np.float64(enter[x, d]) - np.float64(leave[x, d])
         window[:] = 0.0
         for k in range(box):
-            column = rows[np.uint64(columns_at[k])]
+            column = rows[columns_at[k]]
             for d in range(depth):
                 window[d] += column[d]
         for x in range(width):
             if x > 0:
-                enter_x = rows[np.uint64(columns_at[x + box - 1])]
-                leave_x = rows[np.uint64(columns_at[x - 1])]
+                enter_x = rows[columns_at[x + box - 1]]
+                leave_x = rows[columns_at[x - 1]]
                 for d in range(depth):
                     window[d] += enter_x[d] - leave_x[d]
             for d in range(depth):
@@ -75,22 +75,20 @@ def _plane_box_mean_of_band(planes, box, rows_at, columns_at, out, job):
     scale = 1.0 / (box * box)
     columns = np.zeros(width)  # each column's sum over the window's rows
     for i in range(box):
-        src = planes[k, np.uint64(rows_at[first + i])]
+        src = planes[k, rows_at[first + i]]
         for x in range(width):
             columns[x] += src[x]
     for y in range(first, stop):
         if y > first:
-            enter = planes[k, np.uint64(rows_at[y + box - 1])]
-            leave = planes[k, np.uint64(rows_at[y - 1])]
+            enter, leave = planes[k, rows_at[y + box - 1]], planes[k, rows_at[y - 1]]
             for x in range(width):
                 columns[x] += np.float64(enter[x]) - np.float64(leave[x])
         window = 0.0
         for i in range(box):
-            window += columns[np.uint64(columns_at[i])]
+            window += columns[columns_at[i]]
         for x in range(width):
             if x > 0:
-                window += (columns[np.uint64(columns_at[x + box - 1])]
-                           - columns[np.uint64(columns_at[x - 1])])
+                window += columns[columns_at[x + box - 1]] - columns[columns_at[x - 1]]
             out[k, y, x] = window * scale
 
 
