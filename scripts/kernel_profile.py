@@ -21,6 +21,7 @@ and ``objdump`` (binutils). Compiling afresh takes about a minute first.
 from __future__ import annotations
 
 import argparse
+import bisect
 import collections
 import json
 import os
@@ -113,6 +114,8 @@ def short(name: str) -> str:
 
 def report(samples_file: Path, folder: Path, top: int, lines: int,
            show: list[str] | None = None) -> None:
+    """Print each mapped function's share of the recorded samples, then the hottest
+    instructions of the ``top`` functions and of those whose name holds one of ``show``."""
     functions = json.loads((folder / "functions.json").read_text())
     script = subprocess.run(["perf", "script", "-i", str(samples_file), "-F", "ip"],
                             check=True, capture_output=True, text=True).stdout
@@ -122,7 +125,6 @@ def report(samples_file: Path, folder: Path, top: int, lines: int,
     starts = sorted(functions)
     per_function: collections.Counter = collections.Counter()
     per_offset: dict = collections.defaultdict(collections.Counter)
-    import bisect
     keys = [f[0] for f in starts]
     for address, count in addresses.items():
         at = bisect.bisect_right(keys, address) - 1
