@@ -210,7 +210,10 @@ def _sum_line(src, arms_l, arms_r_rev, along_rows, normalise, scale, line, line_
             for d in range(n_disp):
                 sums[i + 1, d] = sums[i, d] + src[y, x, d]
         flat = sums.reshape(-1)
-        top = np.float32(0.0)
+        # Four maxima, each over every fourth candidate: one chain of comparisons held
+        # the loop to its latency.
+        tops = np.zeros(4, np.float32)
+        quads = n_disp // 4
         for i in range(length):
             y = line * along_rows + i * (1 - along_rows)
             x = i * along_rows + line * (1 - along_rows)
@@ -218,10 +221,29 @@ def _sum_line(src, arms_l, arms_r_rev, along_rows, normalise, scale, line, line_
                                                   x, 0)
             _region_ends(i, a_lo, a_hi, r_lo, r_hi, n_disp, ends_lo, ends_hi)
             result = out[y, x]
-            for d in range(n_disp):
+            t0, t1, t2, t3 = tops[0], tops[1], tops[2], tops[3]
+            for q in range(quads):
+                d = 4 * q
+                v0 = np.float32(flat[ends_hi[d]] - flat[ends_lo[d]])
+                v1 = np.float32(flat[ends_hi[d + 1]] - flat[ends_lo[d + 1]])
+                v2 = np.float32(flat[ends_hi[d + 2]] - flat[ends_lo[d + 2]])
+                v3 = np.float32(flat[ends_hi[d + 3]] - flat[ends_lo[d + 3]])
+                result[d] = v0
+                result[d + 1] = v1
+                result[d + 2] = v2
+                result[d + 3] = v3
+                t0 = v0 if v0 > t0 else t0
+                t1 = v1 if v1 > t1 else t1
+                t2 = v2 if v2 > t2 else t2
+                t3 = v3 if v3 > t3 else t3
+            for d in range(4 * quads, n_disp):
                 v = np.float32(flat[ends_hi[d]] - flat[ends_lo[d]])
                 result[d] = v
-                top = v if v > top else top
+                t0 = v if v > t0 else t0
+            tops[0], tops[1], tops[2], tops[3] = t0, t1, t2, t3
+        top = tops[0]
+        for j in range(1, 4):
+            top = tops[j] if tops[j] > top else top
         # A cost that is not a finite number leaves the line's total so: named by a NaN
         # maximum (tested apart, as a NaN-aware maximum stopped LLVM vectorising the loop).
         total = 0.0
