@@ -240,9 +240,13 @@ def cut_arms_at_jumps(arms, disp, jump):
     each way per row and per column."""
     height, width = disp.shape
     # Rows cut the left and right arms, columns the up and down ones: no line writes
-    # another's.
-    for line in prange(height + width):
-        if line < height:
-            _cut_line_arms(arms, disp, jump, np.int64(line), True)
+    # another's. Rows and columns interleaved in proportion (before line i come
+    # i x H / (H + W) rows), so that each thread's run of lines holds as many pixels: all
+    # rows first gave the first thread the rows, longer than columns on a wide view.
+    lines = height + width
+    for i in prange(lines):
+        rows_before = (i * height) // lines
+        if ((i + 1) * height) // lines > rows_before:
+            _cut_line_arms(arms, disp, jump, np.int64(rows_before), True)
         else:
-            _cut_line_arms(arms, disp, jump, np.int64(line - height), False)
+            _cut_line_arms(arms, disp, jump, np.int64(i - rows_before), False)
