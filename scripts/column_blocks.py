@@ -1,9 +1,9 @@
 """How many columns should a scanline column pass walk side by side?
 
-Times the whole range's column pass (both directions) alone on each of the twelve standard
-pairs (the middlebury2 scenes and the Middlebury 2014 quarter-size ones, official ranges) on
-a random volume of the pair's size, for chunks of 1, 2, 8, 32 and 128 columns walked side by
-side, at each of ``--threads`` (``vsmatch.optimization.column_chunk`` is the one used). The
+Times the whole range's column pass (both directions) alone on each of the standard pairs
+(the middlebury2 scenes and the Middlebury 2014 quarter-size ones, official ranges) on a
+random volume of the pair's size, for chunks of 1, 2, 8, 32 and 128 columns walked side by
+side, at each of ``--threads`` (``vsmatch.optimization.COLUMN_CHUNK`` is the one used). The
 result does not depend on it.
 
     python scripts/column_blocks.py [--threads 1,2] [--data-root DIR]
