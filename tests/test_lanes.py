@@ -206,6 +206,11 @@ def test_an_arm_in_lanes_adds_as_its_neighbours_one_by_one(rng):
         stride = int(rng.choice([1, -1, width, -width]))
         length = int(rng.integers(0, 2))  # 0 or 1 neighbour ...
         length = int(rng.integers(0, 5)) if trial % 2 else length  # ... or up to 4
+        # As the kernel calls it: every neighbour lies inside the volume, past its first
+        # pixel and before its last (a column's arm from the third row up read before it).
+        room = next(k for k in range(height * width)
+                    if not 0 < pixel + (k + 1) * stride < height * width - 1)
+        length = min(length, room)
         base, n = int(lo.flat[pixel]), int(rng.integers(1, LANES + 1))
         reach_at, first_pass = int(rng.integers(0, 30)), bool(trial % 3 == 0)
         total = rng.random(LANES).astype(np.float32)
