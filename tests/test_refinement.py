@@ -53,6 +53,28 @@ def test_region_vote_matches_reference(rng):
     assert got_l[:, 8:-3].sum() < labels[:, 8:-3].sum()  # the consensus fixed some
 
 
+def test_region_vote_matches_reference_with_arms_of_every_length(rng):
+    """Regions of odd and even numbers of rows whose rows reach unequally far (the kernel
+    walks two rows' runs side by side, then what is left of the longer)."""
+    h, w, n = 13, 17, 5
+    for _ in range(20):
+        disp = rng.integers(0, n, size=(h, w)).astype(np.int32)
+        disp[:, :6] = rng.integers(0, 2, size=(h, 6))  # long runs, few votes
+        labels = (rng.random((h, w)) < 0.4).astype(np.uint8)
+        arms = rng.integers(0, 6, size=(h, w, 4)).astype(np.int32)
+        xs, ys = np.arange(w), np.arange(h)
+        arms[..., 0] = np.minimum(arms[..., 0], xs[None])
+        arms[..., 1] = np.minimum(arms[..., 1], (w - 1 - xs)[None])
+        arms[..., 2] = np.minimum(arms[..., 2], ys[:, None])
+        arms[..., 3] = np.minimum(arms[..., 3], (h - 1 - ys)[:, None])
+        cfg = VotingConfig(enabled=True, iterations=1, min_votes=3, min_share=0.3)
+        planes = np.ascontiguousarray(np.moveaxis(arms, -1, 0)).astype(np.uint8)
+        got_d, got_l = refinement.region_vote(disp, labels, planes, n_disp=n, cfg=cfg)
+        want_d, want_l = reference.region_vote_once(disp, labels, arms, n, 3, 0.3)
+        np.testing.assert_array_equal(got_d, want_d)
+        np.testing.assert_array_equal(got_l, want_l)
+
+
 def test_discontinuity_adjust_moves_an_edge_to_the_lower_cost():
     disp = np.array([[2, 2, 2, 5, 5]], np.float32)
     volume = np.ones((1, 5, 6), np.float32)

@@ -21,6 +21,21 @@ def vote_runs(disp, labels, votes, run_end):
             run_end[y, x] = run_end[y, x + 1] if votes[y, x] == votes[y, x + 1] else x + 1
 
 
+@njit(inline="always")
+def _count_runs(votes, run_end, hist, yy, xx, stop):
+    """The runs of row ``yy`` from column ``xx`` to ``stop`` (excluded) into ``hist``;
+    returns how many pixels voted."""
+    total = 0
+    while xx < stop:
+        end = min(np.uint64(run_end[yy, xx]), stop)
+        vote = votes[yy, xx]
+        if vote >= 0:
+            hist[np.uint64(vote)] += np.int64(end - xx)
+            total += np.int64(end - xx)
+        xx = end
+    return total
+
+
 @njit(**ROW_OPTIONS)
 def _region_vote_of_row(disp, labels, votes, run_end, arms, n_disp, min_votes, min_share,
                         classes, out_disp, out_labels, height, width, n_blocks, block):
@@ -36,18 +51,38 @@ def _region_vote_of_row(disp, labels, votes, run_end, arms, n_disp, min_votes, m
             hist[:] = 0
             total = 0
             # Unsigned indexes: Numba tests a signed one for a negative value, a branch in
-            # every look-up.
-            for yy in range(np.uint64(y - np.int64(arms[UP, y, x])),
-                            np.uint64(y + np.int64(arms[DOWN, y, x]) + 1)):
-                xx = np.uint64(x - np.int64(arms[LEFT, yy, x]))
-                stop = np.uint64(x + np.int64(arms[RIGHT, yy, x]) + 1)
-                while xx < stop:
-                    end = min(np.uint64(run_end[yy, xx]), stop)
-                    vote = votes[yy, xx]
-                    if vote >= 0:
-                        hist[np.uint64(vote)] += np.int64(end - xx)
-                        total += np.int64(end - xx)
-                    xx = end
+            # every look-up. Two rows' runs walked side by side: each run's end is read at
+            # the last one's, a chain of loads a row, and two chains keep twice the loads
+            # in flight (the counts are whole numbers: the same in any order).
+            first = np.uint64(y - np.int64(arms[UP, y, x]))
+            last = np.uint64(y + np.int64(arms[DOWN, y, x]))
+            for pair in range((last - first + np.uint64(1)) // np.uint64(2)):
+                ya = first + np.uint64(2) * np.uint64(pair)
+                yb = ya + np.uint64(1)
+                xa = np.uint64(x - np.int64(arms[LEFT, ya, x]))
+                stop_a = np.uint64(x + np.int64(arms[RIGHT, ya, x]) + 1)
+                xb = np.uint64(x - np.int64(arms[LEFT, yb, x]))
+                stop_b = np.uint64(x + np.int64(arms[RIGHT, yb, x]) + 1)
+                while xa < stop_a and xb < stop_b:
+                    end_a = min(np.uint64(run_end[ya, xa]), stop_a)
+                    end_b = min(np.uint64(run_end[yb, xb]), stop_b)
+                    vote_a = votes[ya, xa]
+                    vote_b = votes[yb, xb]
+                    if vote_a >= 0:
+                        hist[np.uint64(vote_a)] += np.int64(end_a - xa)
+                        total += np.int64(end_a - xa)
+                    if vote_b >= 0:
+                        hist[np.uint64(vote_b)] += np.int64(end_b - xb)
+                        total += np.int64(end_b - xb)
+                    xa = end_a
+                    xb = end_b
+                total += _count_runs(votes, run_end, hist, ya, xa, stop_a)
+                total += _count_runs(votes, run_end, hist, yb, xb, stop_b)
+            if (last - first) % np.uint64(2) == np.uint64(0):  # an odd count: the last alone
+                yy = last
+                total += _count_runs(votes, run_end, hist, yy,
+                                     np.uint64(x - np.int64(arms[LEFT, yy, x])),
+                                     np.uint64(x + np.int64(arms[RIGHT, yy, x]) + 1))
             if total <= min_votes:
                 continue
             # The first of the largest counts: the largest first, in a loop that vectorises.
