@@ -449,30 +449,54 @@ def _lanes_step(cost, out, y, x, ey, ex, n, base, prev_lo, prev_n, m, started, p
 @njit(**KERNEL_OPTIONS)
 def rows_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, out):
     """:func:`scanline_rows` over bands in a volume :data:`LANES` deep (coarse-to-fine's):
-    the same sums, 1.4x faster than the general band kernel (cones' bands)."""
+    the same sums, 1.4x faster than the general band kernel (cones' bands).
+
+    Two rows walked side by side: a band's step is one vector, and each step waits on the
+    last one's least path cost (a reduction across the lanes), so a row's walk is one chain
+    of latencies; two rows keep two in flight (each row's sums as alone)."""
     height, width, depth = cost.shape
-    for y in prange(height):
-        paths = np.full(2 * _LANE_PATHS, np.inf, dtype=np.float32)  # previous, current
+    for pair in prange((height + 1) // 2):
+        ya = 2 * pair
+        yb = min(ya + 1, height - 1)
+        both = yb > ya
+        # Each row's path costs, previous and current: row b's from 2 _LANE_PATHS.
+        paths = np.full(4 * _LANE_PATHS, np.inf, dtype=np.float32)
         tmp = np.empty(_LANE_PATHS, dtype=np.float32)
-        out[y] = np.float32(0.0)  # both walks add
+        out[ya] = np.float32(0.0)  # both walks add
+        out[yb] = np.float32(0.0)
         for direction in (1, -1):
             start = 0 if direction == 1 else width - 1
-            started = False
-            prev_lo, prev_n, m = np.int64(0), np.int64(0), np.float32(0.0)
+            started_a = started_b = False
+            lo_a, n_a, m_a = np.int64(0), np.int64(0), np.float32(0.0)
+            lo_b, n_b, m_b = np.int64(0), np.int64(0), np.float32(0.0)
             for step in range(width):
                 x = start + direction * step
-                n = np.int64(count[y, x])
-                if n <= 0:  # no band: the path restarts after it
-                    started = False
-                    continue
                 now = step % 2
                 ex = x if direction == 1 else x + 1  # the edge crossed, at the later pixel
-                base = np.int64(lo[y, x])
-                m = _lanes_step(cost, out, y, x, y, ex, n, base, prev_lo, prev_n, m, started,
-                                paths, (1 - now) * _LANE_PATHS, now * _LANE_PATHS, tmp,
-                                change_l, change_r_rev, p1s, p2s, weight)
-                started = True
-                prev_lo, prev_n = base, n
+                n = np.int64(count[ya, x])
+                if n <= 0:  # no band: the path restarts after it
+                    started_a = False
+                else:
+                    base = np.int64(lo[ya, x])
+                    m_a = _lanes_step(cost, out, ya, x, ya, ex, n, base, lo_a, n_a, m_a,
+                                      started_a, paths, (1 - now) * _LANE_PATHS,
+                                      now * _LANE_PATHS, tmp, change_l, change_r_rev, p1s,
+                                      p2s, weight)
+                    started_a = True
+                    lo_a, n_a = base, n
+                if not both:
+                    continue
+                n = np.int64(count[yb, x])
+                if n <= 0:
+                    started_b = False
+                else:
+                    base = np.int64(lo[yb, x])
+                    m_b = _lanes_step(cost, out, yb, x, yb, ex, n, base, lo_b, n_b, m_b,
+                                      started_b, paths, (3 - now) * _LANE_PATHS,
+                                      (2 + now) * _LANE_PATHS, tmp, change_l, change_r_rev,
+                                      p1s, p2s, weight)
+                    started_b = True
+                    lo_b, n_b = base, n
 
 
 @njit(**KERNEL_OPTIONS)
