@@ -212,7 +212,7 @@ def _sum_line(src, arms_l, arms_r_rev, along_rows, normalise, scale, line, line_
         flat = sums.reshape(-1)
         # Four maxima, each over every fourth candidate: one chain of comparisons held
         # the loop to its latency.
-        tops = np.zeros(4, np.float32)
+        t0 = t1 = t2 = t3 = np.float32(0.0)
         quads = n_disp // 4
         for i in range(length):
             y = line * along_rows + i * (1 - along_rows)
@@ -221,7 +221,6 @@ def _sum_line(src, arms_l, arms_r_rev, along_rows, normalise, scale, line, line_
                                                   x, 0)
             _region_ends(i, a_lo, a_hi, r_lo, r_hi, n_disp, ends_lo, ends_hi)
             result = out[y, x]
-            t0, t1, t2, t3 = tops[0], tops[1], tops[2], tops[3]
             for q in range(quads):
                 d = 4 * q
                 v0 = np.float32(flat[ends_hi[d]] - flat[ends_lo[d]])
@@ -240,10 +239,9 @@ def _sum_line(src, arms_l, arms_r_rev, along_rows, normalise, scale, line, line_
                 v = np.float32(flat[ends_hi[d]] - flat[ends_lo[d]])
                 result[d] = v
                 t0 = v if v > t0 else t0
-            tops[0], tops[1], tops[2], tops[3] = t0, t1, t2, t3
-        top = tops[0]
-        for j in range(1, 4):
-            top = tops[j] if tops[j] > top else top
+        t01 = t0 if t0 > t1 else t1
+        t23 = t2 if t2 > t3 else t3
+        top = t01 if t01 > t23 else t23
         # A cost that is not a finite number leaves the line's total so: named by a NaN
         # maximum (tested apart, as a NaN-aware maximum stopped LLVM vectorising the loop).
         total = 0.0
