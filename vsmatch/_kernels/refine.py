@@ -22,17 +22,25 @@ def vote_runs(disp, labels, votes, run_end):
 
 
 @njit(inline="always")
+def _count_run(votes, run_end, hist, yy, xx, stop):
+    """The run of row ``yy`` that holds column ``xx``, cut at ``stop``, into ``hist``;
+    returns the column after it and how many pixels voted."""
+    end = min(np.uint64(run_end[yy, xx]), stop)
+    vote = votes[yy, xx]
+    if vote < 0:
+        return end, np.int64(0)
+    hist[np.uint64(vote)] += np.int64(end - xx)
+    return end, np.int64(end - xx)
+
+
+@njit(inline="always")
 def _count_runs(votes, run_end, hist, yy, xx, stop):
     """The runs of row ``yy`` from column ``xx`` to ``stop`` (excluded) into ``hist``;
     returns how many pixels voted."""
-    total = 0
+    total = np.int64(0)
     while xx < stop:
-        end = min(np.uint64(run_end[yy, xx]), stop)
-        vote = votes[yy, xx]
-        if vote >= 0:
-            hist[np.uint64(vote)] += np.int64(end - xx)
-            total += np.int64(end - xx)
-        xx = end
+        xx, voted = _count_run(votes, run_end, hist, yy, xx, stop)
+        total += voted
     return total
 
 
@@ -64,18 +72,9 @@ def _region_vote_of_row(disp, labels, votes, run_end, arms, n_disp, min_votes, m
                 xb = np.uint64(x - np.int64(arms[LEFT, yb, x]))
                 stop_b = np.uint64(x + np.int64(arms[RIGHT, yb, x]) + 1)
                 while xa < stop_a and xb < stop_b:
-                    end_a = min(np.uint64(run_end[ya, xa]), stop_a)
-                    end_b = min(np.uint64(run_end[yb, xb]), stop_b)
-                    vote_a = votes[ya, xa]
-                    vote_b = votes[yb, xb]
-                    if vote_a >= 0:
-                        hist[np.uint64(vote_a)] += np.int64(end_a - xa)
-                        total += np.int64(end_a - xa)
-                    if vote_b >= 0:
-                        hist[np.uint64(vote_b)] += np.int64(end_b - xb)
-                        total += np.int64(end_b - xb)
-                    xa = end_a
-                    xb = end_b
+                    xa, voted_a = _count_run(votes, run_end, hist, ya, xa, stop_a)
+                    xb, voted_b = _count_run(votes, run_end, hist, yb, xb, stop_b)
+                    total += voted_a + voted_b
                 total += _count_runs(votes, run_end, hist, ya, xa, stop_a)
                 total += _count_runs(votes, run_end, hist, yb, xb, stop_b)
             if (last - first) % np.uint64(2) == np.uint64(0):  # an odd count: the last alone
