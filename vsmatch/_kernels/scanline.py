@@ -446,6 +446,21 @@ def _lanes_step(cost, out, y, x, ey, ex, n, base, prev_lo, prev_n, m, started, p
     return new_min
 
 
+@njit(inline="always")
+def _lanes_walk_step(cost, out, lo, count, y, x, ex, started, prev_lo, prev_n, m, paths,
+                     prev_at, cur_at, tmp, change_l, change_r_rev, p1s, p2s, weight):
+    """Pixel (y, x) of a row's walk over bands (:func:`_lanes_step`), the walk's state in
+    and out: whether it has started, its last band and its minimum. A pixel without a band
+    restarts the path after it."""
+    n = np.int64(count[y, x])
+    if n <= 0:
+        return False, prev_lo, prev_n, m
+    base = np.int64(lo[y, x])
+    m = _lanes_step(cost, out, y, x, y, ex, n, base, prev_lo, prev_n, m, started, paths,
+                    prev_at, cur_at, tmp, change_l, change_r_rev, p1s, p2s, weight)
+    return True, base, n, m
+
+
 @njit(**KERNEL_OPTIONS)
 def rows_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, out):
     """:func:`scanline_rows` over bands in a volume :data:`LANES` deep (coarse-to-fine's):
@@ -473,30 +488,15 @@ def rows_over_lanes(cost, lo, count, change_l, change_r_rev, p1s, p2s, weight, o
                 x = start + direction * step
                 now = step % 2
                 ex = x if direction == 1 else x + 1  # the edge crossed, at the later pixel
-                n = np.int64(count[ya, x])
-                if n <= 0:  # no band: the path restarts after it
-                    started_a = False
-                else:
-                    base = np.int64(lo[ya, x])
-                    m_a = _lanes_step(cost, out, ya, x, ya, ex, n, base, lo_a, n_a, m_a,
-                                      started_a, paths, (1 - now) * _LANE_PATHS,
-                                      now * _LANE_PATHS, tmp, change_l, change_r_rev, p1s,
-                                      p2s, weight)
-                    started_a = True
-                    lo_a, n_a = base, n
-                if not both:
-                    continue
-                n = np.int64(count[yb, x])
-                if n <= 0:
-                    started_b = False
-                else:
-                    base = np.int64(lo[yb, x])
-                    m_b = _lanes_step(cost, out, yb, x, yb, ex, n, base, lo_b, n_b, m_b,
-                                      started_b, paths, (3 - now) * _LANE_PATHS,
-                                      (2 + now) * _LANE_PATHS, tmp, change_l, change_r_rev,
-                                      p1s, p2s, weight)
-                    started_b = True
-                    lo_b, n_b = base, n
+                started_a, lo_a, n_a, m_a = _lanes_walk_step(
+                    cost, out, lo, count, ya, x, ex, started_a, lo_a, n_a, m_a, paths,
+                    (1 - now) * _LANE_PATHS, now * _LANE_PATHS, tmp, change_l, change_r_rev,
+                    p1s, p2s, weight)
+                if both:
+                    started_b, lo_b, n_b, m_b = _lanes_walk_step(
+                        cost, out, lo, count, yb, x, ex, started_b, lo_b, n_b, m_b, paths,
+                        (3 - now) * _LANE_PATHS, (2 + now) * _LANE_PATHS, tmp, change_l,
+                        change_r_rev, p1s, p2s, weight)
 
 
 @njit(**KERNEL_OPTIONS)
