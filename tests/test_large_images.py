@@ -1,5 +1,6 @@
 """Coarse-to-fine search and stripes: the parts that keep large images in bounds."""
 
+import contextlib
 import os
 
 import numba
@@ -8,7 +9,7 @@ import pytest
 from click.testing import CliRunner
 
 from vsmatch import (aggregation, datasets, disparity, images, level, metrics, optimization,
-                     pipeline, pyramid, scale, tiles)
+                     pipeline, pyramid, scale, tiles, volumes)
 from vsmatch.bands import Bands
 from vsmatch.bench import upscaled_scene
 from vsmatch.cli import main
@@ -224,6 +225,33 @@ def test_stripes_agree_with_one_piece_but_near_seams(teddy):
     bad_one, bad_cut = (metrics.bad_percent(d, s.ground_truth, s.masks["nonocc"], 2.0)
                         for d in (one.disparity, cut.disparity))
     assert abs(bad_cut - bad_one) < 0.3
+
+
+def test_stripes_share_their_volumes_memory_and_hold_none_after(teddy, monkeypatch):
+    """Each stripe of a level takes the last one's volume memory (one buffer a slot for
+    the three stripes), the bytes as with fresh memory a stripe, and nothing is held
+    once the match is done."""
+    s = teddy
+    cfg = config_from_dict({"memory": {"max_mb": 60}, "photometric": {"enabled": False}},
+                           base=load_config(None))
+    mapped = []
+    take = volumes.VolumePool.take
+
+    def counted(pool, slot, shape):
+        held = pool._held.get(slot)
+        if held is None or held.size < int(np.prod(shape)):
+            mapped.append(slot)
+        return take(pool, slot, shape)
+
+    monkeypatch.setattr(volumes.VolumePool, "take", counted)
+    shared = pipeline.run(s.left, s.right, max_disp=s.max_disp, config=cfg)
+    assert shared.stripes == 3
+    assert sorted(set(mapped)) == ["cost", "work"] and len(mapped) <= 4  # the last may grow
+    assert getattr(volumes._active, "pool", None) is None
+    monkeypatch.setattr(volumes, "shared_by_stripes", contextlib.nullcontext)
+    fresh = pipeline.run(s.left, s.right, max_disp=s.max_disp, config=cfg)
+    assert shared.disparity.tobytes() == fresh.disparity.tobytes()
+    assert shared.confidence.tobytes() == fresh.confidence.tobytes()
 
 
 @pytest.mark.parametrize("base", ["default", "fast", "accurate"])

@@ -10,7 +10,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from . import confidence, disparity, pyramid
+from . import confidence, disparity, pyramid, volumes
 from .bands import Bands
 from .config import Config
 from .disparity import INVALID_DISPARITY
@@ -174,21 +174,22 @@ def in_stripes(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp: int
     labels = None
     curve = None
     seconds: dict[str, float] = {}
-    for first, stop, core_first, core_stop in layout:
-        part = solve(left[first:stop], right[first:stop], max_disp, cfg,
-                     None if bands is None else bands.rows(first, stop))
-        if part.curve is not None and curve is None:
-            curve = {name: np.empty((height, width), np.float32) for name in part.curve}
-        core = slice(core_first - first, core_stop - first)
-        disp[core_first:core_stop] = part.disparity[core]
-        if part.labels is not None:
-            if labels is None:
-                labels = np.empty((height, width), dtype=np.uint8)
-            labels[core_first:core_stop] = part.labels[core]
-        for name, values in (part.curve or {}).items():
-            curve[name][core_first:core_stop] = values[core]
-        for name, value in part.seconds.items():
-            seconds[name] = seconds.get(name, 0.0) + value
+    with volumes.shared_by_stripes():
+        for first, stop, core_first, core_stop in layout:
+            part = solve(left[first:stop], right[first:stop], max_disp, cfg,
+                         None if bands is None else bands.rows(first, stop))
+            if part.curve is not None and curve is None:
+                curve = {name: np.empty((height, width), np.float32) for name in part.curve}
+            core = slice(core_first - first, core_stop - first)
+            disp[core_first:core_stop] = part.disparity[core]
+            if part.labels is not None:
+                if labels is None:
+                    labels = np.empty((height, width), dtype=np.uint8)
+                labels[core_first:core_stop] = part.labels[core]
+            for name, values in (part.curve or {}).items():
+                curve[name][core_first:core_stop] = values[core]
+            for name, value in part.seconds.items():
+                seconds[name] = seconds.get(name, 0.0) + value
     return MatchResult(disparity=disp, labels=labels, seconds=seconds, config=part.config,
                        noise_sigma=part.noise_sigma, colour_weight=part.colour_weight,
                        stripes=len(layout), curve=curve)
