@@ -1,6 +1,7 @@
 """The benchmark code works; it asserts no speed (timings are for vsmatch bench)."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -93,6 +94,8 @@ def test_size_child_reports_time_memory_and_accuracy(data_dir):
     assert report["size"] == [718, 496] and report["levels"] == 73
     assert report["threshold"] == 2.0 and 5 < report["bad_nonocc"] < 40
     assert report["peak_mb"] >= report["before_match_mb"] > 0 and report["seconds"] > 0
+    # The system's share, within the match's time on at most this machine's cores.
+    assert 0 <= report["system_seconds"] <= report["seconds"] * (os.cpu_count() or 1) + 0.05
     tall = subprocess.run([sys.executable, "-m", "vsmatch.bench", "size", "--matcher",
                            "sgbm-5", "--scale", "1", "--tall", "--data-root", str(data_dir)],
                           capture_output=True, text=True)
