@@ -354,18 +354,15 @@ def _child_size(argv: list[str]) -> None:
         crop = (slice(0, 48), slice(0, 64))  # load the kernels before the baseline
         pipeline.run(left[crop], right[crop], max_disp=16, config=args.config)
     before = _current_rss_mb()
-    system = _system_seconds()
     if args.matcher == "vsmatch":
-        start = time.perf_counter()
+        system, start = _system_seconds(), time.perf_counter()
         disp = pipeline.match(left, right, max_disp=max_disp, config=args.config)
-        seconds = time.perf_counter() - start
+        seconds, system = time.perf_counter() - start, _system_seconds() - system
     else:
         matcher = sgbm_matcher(max_disp, mode=SGBM_MODES[args.matcher])
-        start = time.perf_counter()
+        system, start = _system_seconds(), time.perf_counter()
         raw = matcher.compute(left, right)
-        seconds = time.perf_counter() - start
-    system = _system_seconds() - system
-    if args.matcher != "vsmatch":
+        seconds, system = time.perf_counter() - start, _system_seconds() - system
         disp = sgbm_fill_from_left(raw)  # for the score only, as in time_pairs
     peak = _peak_rss_mb()
     threshold = 2.0 * args.scale
