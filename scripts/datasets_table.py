@@ -34,17 +34,23 @@ def halves(names: list[str]) -> tuple[list[str], list[str]]:
     return ordered[0::2], ordered[1::2]
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def config_and_data_root(description: str):
+    """A script's ``CONFIG [section.key=value ...] [--data-root DIR]`` arguments: the
+    config with its keys changed, and the data root."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("config")
     parser.add_argument("changes", nargs="*", metavar="section.key=value")
     parser.add_argument("--data-root", default=None)
     args = parser.parse_args()
-    cfg = with_changes(args.config, args.changes)
+    return with_changes(args.config, args.changes), args.data_root
+
+
+def main() -> None:
+    cfg, data_root = config_and_data_root(__doc__.splitlines()[0])
     start = time.perf_counter()
     parts, hard = [], {}
     for name in DATASETS:
-        report = evaluation.evaluate(datasets.load_dataset(name, args.data_root), {"m": cfg},
+        report = evaluation.evaluate(datasets.load_dataset(name, data_root), {"m": cfg},
                                      dataset=name)
         figures = evaluation.headline_figures(report, "m")
         standard = [v for scene, v in figures.items() if scene not in HARD]

@@ -9,7 +9,7 @@ import numpy as np
 from vsmatch import pipeline
 from vsmatch._kernels.bands import centre_on_likest
 from vsmatch.config import with_changes
-from vsmatch.synthetic import wires_pair
+from vsmatch.synthetic import fence_pair, wires_pair
 
 
 def test_a_wide_cell_is_centred_on_the_neighbour_of_the_nearest_grey():
@@ -92,3 +92,24 @@ def test_the_full_search_keeps_thin_bright_wires_through_the_exposure_map():
         # before a bright wall, the levels below the matched ones: 59 %).
         assert as_wire[wire].mean() > 0.98
         assert as_wire.sum() / wire.sum() < 1.1
+
+
+def test_the_fence_pairs_truth_matches_its_views():
+    """``fence_pair``'s disparity and visibility are what its views show: each visible left
+    pixel has its own grey level (within the sensor noise) at x - d in the right view, and a
+    wall pixel marked hidden has a wire there instead."""
+    pair = fence_pair(3, spacing=32)
+    wire = pair.disparity == 40
+    ys, xs = np.nonzero(pair.nonocc)
+    shown = pair.right[ys, xs - pair.disparity[ys, xs].astype(int)].astype(int)
+    difference = np.abs(pair.left[ys, xs].astype(int) - shown)
+    assert np.percentile(difference, 99) <= 6  # noise of 1 grey level in each view
+    hidden = ~pair.nonocc & ~wire & (np.arange(pair.left.shape[1])[None, :] >= 20)
+    ys, xs = np.nonzero(hidden)
+    assert hidden.sum() > 0.1 * (~wire).sum()  # wires stand before a fifth of the wall
+    assert np.all(pair.right[ys, xs - 20] >= 190)  # the fence's grey levels: 200-240
+    # Wires at +45 and -45 degrees: a row and a column each cross one every 32 px.
+    for line in (wire[180, 100:400], wire[100:300, 240]):
+        starts = np.flatnonzero(line[1:] & ~line[:-1])
+        assert 0 < np.diff(starts).max() <= 32
+    assert np.all(pair.disparity[~wire] == 20)

@@ -117,6 +117,20 @@ def fins_pair(period: int = 12, width: int = 480, height: int = 360, wall: float
     return SyntheticPair(views[0], views[1], disparity, nonocc, int(np.ceil(max(wall, fins))) + 16)
 
 
+def _wall_and_wire_textures(rng: np.random.Generator, height: int, width: int,
+                            wall_contrast: float) -> tuple[np.ndarray, np.ndarray]:
+    """A wall's grey texture (110 up, spanning ``wall_contrast`` levels) and a wire's
+    (200-240), float32 (H, W), random and smooth."""
+    texture, wire_texture = (
+        cv2.GaussianBlur(rng.random((height, width), dtype=np.float32), (0, 0), blur)
+        for blur in (1.2, 1.0))
+    texture = 110 + wall_contrast * (texture - texture.min()) / float(texture.max()
+                                                                    - texture.min())
+    wire_texture = 200 + 40 * ((wire_texture - wire_texture.min())
+                               / float(wire_texture.max() - wire_texture.min()))
+    return texture, wire_texture
+
+
 def wires_pair(thickness: int = 3, spacing: int = 40, width: int = 480, height: int = 360,
                wall: float = 20.0, wires: float = 40.0, noise: float = 1.0,
                seed: int = 0) -> SyntheticPair:
@@ -127,12 +141,7 @@ def wires_pair(thickness: int = 3, spacing: int = 40, width: int = 480, height: 
     rng = np.random.default_rng(seed)
     margin = int(np.ceil(max(wall, wires))) + 2
     columns = np.arange(width + 2 * margin, dtype=np.float32) - margin  # surface u
-    texture, wire_texture = (
-        cv2.GaussianBlur(rng.random((height, columns.size), dtype=np.float32), (0, 0), blur)
-        for blur in (1.2, 1.0))
-    texture = 110 + 30 * (texture - texture.min()) / float(texture.max() - texture.min())
-    wire_texture = 200 + 40 * ((wire_texture - wire_texture.min())
-                               / float(wire_texture.max() - wire_texture.min()))
+    texture, wire_texture = _wall_and_wire_textures(rng, height, columns.size, 30)
     on = (((columns - 20) % spacing) < thickness) & (columns >= 60) & (columns < width - 40)
     xs = np.arange(width, dtype=np.float32)
     views = []
@@ -147,6 +156,45 @@ def wires_pair(thickness: int = 3, spacing: int = 40, width: int = 480, height: 
     wire = on[np.clip(np.floor(xs + margin).astype(int), 0, columns.size - 1)]
     disparity = np.where(np.repeat(wire[None, :], height, 0), wires, wall).astype(np.float32)
     nonocc = xs[None, :] >= disparity
+    return SyntheticPair(views[0], views[1], disparity, nonocc,
+                         int(np.ceil(max(wall, wires))) + 24)
+
+
+def fence_pair(thickness: int = 3, spacing: int = 32, width: int = 480, height: int = 360,
+               wall: float = 20.0, wires: float = 40.0, wall_contrast: float = 30.0,
+               noise: float = 1.0, seed: int = 0) -> SyntheticPair:
+    """A chain-link fence: two sets of wires ``thickness`` px wide, at +45 and -45 degrees,
+    ``spacing`` px apart (along the rows: diamond holes), bright and finely textured, at
+    disparity ``wires`` in front of a wall at ``wall`` whose random texture spans
+    ``wall_contrast`` grey levels (grey, each view with its own sensor noise of ``noise``).
+    Where :func:`wires_pair`'s vertical wires leave wide gaps along the rows, here every
+    row and column crosses a wire at least every ``spacing`` px, and the wires cross."""
+    rng = np.random.default_rng(seed)
+    margin = int(np.ceil(max(wall, wires))) + 2
+    columns = np.arange(width + 2 * margin, dtype=np.float32) - margin  # surface u
+    texture, wire_texture = _wall_and_wire_textures(rng, height, columns.size,
+                                                    wall_contrast)
+    ys = np.arange(height, dtype=np.float32)[:, None]
+    along = np.float32(np.sqrt(0.5))  # the wires' distance across, per pixel along a row
+    on = ((((columns + ys) * along) % (spacing * along)) < thickness) | \
+        ((((columns - ys) * along) % (spacing * along)) < thickness)
+    on &= (columns >= 60) & (columns < width - 40)
+    xs = np.arange(width, dtype=np.float32)
+    views, shown_on = [], []
+    for shift in (0.0, 1.0):  # left view, right view: a point at u shows at x = u - shift d
+        image = np.stack([np.interp(xs + shift * wall, columns, row) for row in texture])
+        cells = np.clip(np.floor(xs + shift * wires + margin).astype(int), 0, columns.size - 1)
+        shown = on[:, cells]
+        fence = np.stack([np.interp(xs + shift * wires, columns, row) for row in wire_texture])
+        image[shown] = fence[shown]
+        image += rng.normal(0.0, noise, image.shape)
+        views.append(np.clip(np.round(image), 0, 255).astype(np.uint8))
+        shown_on.append(shown)
+    wire = shown_on[0]
+    disparity = np.where(wire, wires, wall).astype(np.float32)
+    # A wall pixel is seen by the right view unless a wire stands in front of its match.
+    match = np.clip(np.rint(xs - wall).astype(int), 0, width - 1)
+    nonocc = (xs[None, :] >= disparity) & (wire | ~shown_on[1][:, match])
     return SyntheticPair(views[0], views[1], disparity, nonocc,
                          int(np.ceil(max(wall, wires))) + 24)
 
