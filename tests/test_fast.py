@@ -2,11 +2,13 @@
 SGBM's errors on every dataset, run through the real pipeline on the real data, and
 within today's figures plus a small margin (tests/figures.yaml)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
-from vsmatch import datasets, evaluation, pipeline, pyramid
-from vsmatch.config import load_config
+from vsmatch import datasets, evaluation, level, pipeline, pyramid, scale
+from vsmatch.config import ConfigError, config_from_dict, load_config
 
 from conftest import standard_scenes
 from figures import hold
@@ -39,6 +41,36 @@ def test_fast_is_bundled_and_searches_one_level_down(rng):
     assert np.mean(np.abs(result.disparity[inside] - 6) < 0.5) > 0.95
     assert result.confidence.shape == left.shape[:2]
     assert 0 <= result.confidence.min() and result.confidence.max() <= 1
+
+
+def test_a_level_down_takes_the_scanlines_p2_times_level_p2():
+    cfg = load_config("fast")
+    down = cfg.a_level_down()
+    assert cfg.scanline.level_p2 == 0.5 and down.scanline.p2 == cfg.scanline.p2 * 0.5
+    assert down.a_level_down().scanline.p2 == cfg.scanline.p2 * 0.25  # per level
+    assert dataclasses.replace(down, scanline=cfg.scanline) == cfg  # P2 alone changes
+    default = load_config("default")
+    assert default.scanline.level_p2 == 1.0 and default.a_level_down() is default
+    for value in (0.0, 1.5):
+        with pytest.raises(ConfigError, match="scanline.level_p2"):
+            config_from_dict({"scanline": {"level_p2": value}})
+
+
+def test_each_level_down_is_solved_with_its_own_p2(rng):
+    """coarse_to_fine hands each level down ``cfg.a_level_down()``: the full search two
+    levels down P2 x 0.25, the bands one level down x 0.5, the views' own size as given."""
+    cfg = load_config("fast")
+    left = rng.integers(0, 256, (96, 320, 3), dtype=np.uint8)
+    right = np.ascontiguousarray(np.roll(left, -8, axis=1))
+    seen = []
+
+    def solve(left, right, max_disp, cfg, bands=None):
+        seen.append((left.shape[1], cfg.scanline.p2))
+        return level.solve(left, right, max_disp, cfg, bands)
+
+    scale.coarse_to_fine(solve, left, right, 40, cfg, levels=2)
+    p2 = cfg.scanline.p2
+    assert seen == [(80, p2 * 0.25), (160, p2 * 0.5), (320, p2)]
 
 
 @pytest.mark.data

@@ -134,6 +134,16 @@ class ScanlineConfig:
         "Divide P1, P2 by this where it changes in both."))
     directions: int = _param(4, choices=(4, 8), doc=(
         "4: rows and columns; 8: the diagonals too."))
+    level_p2: float = _param(1.0, 0.05, 1.0, doc=(
+        "P2 multiplied by this at each pyramid level below the views' size: a path there "
+        "crosses half the pixels of the same scene, and its matching costs half the "
+        "evidence, against the same penalty for a jump (0.5 keeps their balance)."))
+
+    def a_level_down(self) -> ScanlineConfig:
+        """The section as a level down takes it: P2 times ``level_p2``."""
+        if self.level_p2 == 1.0:
+            return self
+        return dataclasses.replace(self, p2=self.p2 * self.level_p2)
 
 
 @dataclass(frozen=True)
@@ -549,6 +559,13 @@ class Config:
     # these sit under ``schedule:``.
     pyramid: PyramidConfig = field(default_factory=PyramidConfig)
     memory: MemoryConfig = field(default_factory=MemoryConfig)
+
+    def a_level_down(self) -> Config:
+        """The config a pyramid level down searches with (the scanline's P2 scaled by
+        ``scanline.level_p2``); itself where nothing changes."""
+        scanline = self.scanline.a_level_down()
+        return self if scanline is self.scanline else dataclasses.replace(self,
+                                                                          scanline=scanline)
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """Every section's values, by section name."""

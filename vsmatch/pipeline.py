@@ -156,7 +156,7 @@ def _coarse_look(left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config
     _, coarse_max = pyramid.level_down(left.shape[1], max_disp)
     small_l = downsample(left[first:stop])
     coarse = scale.in_stripes(functools.partial(solve, learnt=learnt), small_l,
-                              downsample(right[first:stop]), coarse_max, cfg)
+                              downsample(right[first:stop]), coarse_max, cfg.a_level_down())
     shape = (stop - first, left.shape[1])
     bands = pyramid.bands_from_coarse(coarse.disparity, coarse.labels, shape, max_disp,
                                       cfg.bands, views=(left[first:stop], small_l))

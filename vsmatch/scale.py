@@ -109,12 +109,14 @@ def coarse_to_fine(solve: Solver, left: np.ndarray, right: np.ndarray, max_disp:
                    cfg: Config, levels: int) -> MatchResult:
     """``solve`` over the whole range ``levels`` pyramid levels down, then at each level up
     over bands around twice the estimate below (``pyramid.bands_from_coarse``); each level
-    in stripes (:func:`in_stripes`). The solver is all this knows of the method."""
+    in stripes (:func:`in_stripes`), each level down with ``cfg.a_level_down()``. The
+    solver and the config are all this knows of the method."""
     if levels == 0:
         return in_stripes(solve, left, right, max_disp, cfg)
     small_l, small_r = downsample(left), downsample(right)
     _, coarse_max = pyramid.level_down(left.shape[1], max_disp)
-    coarse = coarse_to_fine(solve, small_l, small_r, coarse_max, cfg, levels - 1)
+    coarse = coarse_to_fine(solve, small_l, small_r, coarse_max, cfg.a_level_down(),
+                            levels - 1)
     with timed(coarse.seconds, "bands"):
         bands = pyramid.bands_from_coarse(coarse.disparity, coarse.labels, left.shape[:2],
                                           max_disp, cfg.bands, views=(left, small_l))
