@@ -131,6 +131,28 @@ def _wall_and_wire_textures(rng: np.random.Generator, height: int, width: int,
     return texture, wire_texture
 
 
+def _wall_behind_wires(texture: np.ndarray, wire_texture: np.ndarray, columns: np.ndarray,
+                       on: np.ndarray, margin: int, wall: float, wires: float, noise: float,
+                       rng: np.random.Generator) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The left and right views (uint8, each with its own sensor noise of ``noise``) of a
+    wall at disparity ``wall`` behind wires at ``wires``, both textured along the surface
+    coordinate ``columns`` (``margin`` of them left of the views), the wires where ``on``
+    (H, columns) holds; and where each view shows a wire."""
+    width = columns.size - 2 * margin
+    xs = np.arange(width, dtype=np.float32)
+    views, shown_on = [], []
+    for shift in (0.0, 1.0):  # left view, right view: a point at u shows at x = u - shift d
+        image = np.stack([np.interp(xs + shift * wall, columns, row) for row in texture])
+        u = xs + shift * wires
+        shown = on[:, np.clip(np.floor(u + margin).astype(int), 0, columns.size - 1)]
+        fence = np.stack([np.interp(u, columns, row) for row in wire_texture])
+        image[shown] = fence[shown]
+        image += rng.normal(0.0, noise, image.shape)
+        views.append(np.clip(np.round(image), 0, 255).astype(np.uint8))
+        shown_on.append(shown)
+    return views, shown_on
+
+
 def wires_pair(thickness: int = 3, spacing: int = 40, width: int = 480, height: int = 360,
                wall: float = 20.0, wires: float = 40.0, noise: float = 1.0,
                seed: int = 0) -> SyntheticPair:
@@ -143,19 +165,10 @@ def wires_pair(thickness: int = 3, spacing: int = 40, width: int = 480, height: 
     columns = np.arange(width + 2 * margin, dtype=np.float32) - margin  # surface u
     texture, wire_texture = _wall_and_wire_textures(rng, height, columns.size, 30)
     on = (((columns - 20) % spacing) < thickness) & (columns >= 60) & (columns < width - 40)
-    xs = np.arange(width, dtype=np.float32)
-    views = []
-    for shift in (0.0, 1.0):  # left view, right view: a point at u shows at x = u - shift d
-        image = np.stack([np.interp(xs + shift * wall, columns, row) for row in texture])
-        u = xs + shift * wires
-        shown = on[np.clip(np.floor(u + margin).astype(int), 0, columns.size - 1)]
-        image[:, shown] = np.stack([np.interp(u, columns, row)
-                                    for row in wire_texture])[:, shown]
-        image += rng.normal(0.0, noise, image.shape)
-        views.append(np.clip(np.round(image), 0, 255).astype(np.uint8))
-    wire = on[np.clip(np.floor(xs + margin).astype(int), 0, columns.size - 1)]
-    disparity = np.where(np.repeat(wire[None, :], height, 0), wires, wall).astype(np.float32)
-    nonocc = xs[None, :] >= disparity
+    views, shown = _wall_behind_wires(texture, wire_texture, columns, np.broadcast_to(
+        on, (height, columns.size)), margin, wall, wires, noise, rng)
+    disparity = np.where(shown[0], wires, wall).astype(np.float32)
+    nonocc = np.arange(width, dtype=np.float32)[None, :] >= disparity
     return SyntheticPair(views[0], views[1], disparity, nonocc,
                          int(np.ceil(max(wall, wires))) + 24)
 
@@ -179,22 +192,14 @@ def fence_pair(thickness: int = 3, spacing: int = 32, width: int = 480, height: 
     on = ((((columns + ys) * along) % (spacing * along)) < thickness) | \
         ((((columns - ys) * along) % (spacing * along)) < thickness)
     on &= (columns >= 60) & (columns < width - 40)
-    xs = np.arange(width, dtype=np.float32)
-    views, shown_on = [], []
-    for shift in (0.0, 1.0):  # left view, right view: a point at u shows at x = u - shift d
-        image = np.stack([np.interp(xs + shift * wall, columns, row) for row in texture])
-        cells = np.clip(np.floor(xs + shift * wires + margin).astype(int), 0, columns.size - 1)
-        shown = on[:, cells]
-        fence = np.stack([np.interp(xs + shift * wires, columns, row) for row in wire_texture])
-        image[shown] = fence[shown]
-        image += rng.normal(0.0, noise, image.shape)
-        views.append(np.clip(np.round(image), 0, 255).astype(np.uint8))
-        shown_on.append(shown)
-    wire = shown_on[0]
+    views, shown = _wall_behind_wires(texture, wire_texture, columns, on, margin, wall, wires,
+                                      noise, rng)
+    wire = shown[0]
     disparity = np.where(wire, wires, wall).astype(np.float32)
     # A wall pixel is seen by the right view unless a wire stands in front of its match.
+    xs = np.arange(width, dtype=np.float32)
     match = np.clip(np.rint(xs - wall).astype(int), 0, width - 1)
-    nonocc = (xs[None, :] >= disparity) & (wire | ~shown_on[1][:, match])
+    nonocc = (xs[None, :] >= disparity) & (wire | ~shown[1][:, match])
     return SyntheticPair(views[0], views[1], disparity, nonocc,
                          int(np.ceil(max(wall, wires))) + 24)
 
