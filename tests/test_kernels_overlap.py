@@ -18,8 +18,10 @@ import pytest
 from vsmatch import compilation
 
 #: Arguments that may share memory: both only read by the kernel (a curve's margin taken
-#: for the raw margin where no scanline ran; the same view given as both views).
+#: for the raw margin where no scanline ran; the same view given as both views; a plane
+#: fit before the last solved where the pixels it weighs are kept).
 READ_TOGETHER = {
+    "planes.fit_region_planes": {("kept", "wanted")},
     "confidence.pixel_terms": {("margin", "raw_margin")},
     "cost.view_terms": {("colour_l", "colour_r")},
     "photometric.matched_colours": {("left", "right")},

@@ -98,8 +98,9 @@ def test_region_planes_recover_an_exact_plane():
     # Every pixel's region the whole image.
     arms = np.stack([xs, w - 1 - xs, ys, h - 1 - ys]).astype(np.uint8)
     out, spread = np.empty((h, w), np.float32), np.empty((h, w), np.float32)
-    fit_region_planes(disp, np.ones((h, w), np.float32), arms, np.float32(0.2),
-                      np.float32(1.0), planes.moment_blocks((h, w)), out, spread)
+    fit_region_planes(disp, np.ones((h, w), bool), np.empty((0, 0), np.float32),
+                      np.float32(1.0), arms, np.float32(0.2), np.float32(1.0),
+                      np.ones((h, w), bool), planes.moment_blocks((h, w)), out, spread)
     np.testing.assert_allclose(out, disp, atol=2e-3)
     assert spread.max() < 0.05
 

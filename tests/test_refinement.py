@@ -135,19 +135,58 @@ def test_region_planes_match_reference(rng):
     height, width = 23, 2 * COLUMN_BLOCK + 5
     disp = (rng.random((height, width)) * 40).astype(np.float32)
     disp[5, :] = np.nan
-    weight = (rng.random((height, width)) < 0.7).astype(np.float32)
+    kept = rng.random((height, width)) < 0.7
     arms = rng.integers(0, 4, (4, height, width)).astype(np.uint8)
     arms[:, :, :10] = 0  # single pixels: no spread along either axis
     arms[0:2, 10:, 10:20] = 0  # columns only: a constant along u
     keep_arms_inside(arms)
     got = np.empty((height, width), np.float32), np.empty((height, width), np.float32)
-    fit_region_planes(disp, weight, arms, np.float32(0.5), np.float32(1.0),
+    fit_region_planes(disp, kept, np.empty((0, 0), np.float32), np.float32(1.0), arms,
+                      np.float32(0.5), np.float32(1.0), np.ones((height, width), bool),
                       moment_blocks((height, width)), *got)
-    sums = reference.region_moment_sums(reference.plane_moments(disp, weight), arms)
+    sums = reference.region_moment_sums(
+        reference.plane_moments(disp, kept.astype(np.float32)), arms)
     want = reference.plane_values(sums, 0.5, 1.0)
     for g, w in zip(got, want):
         assert g.tobytes() == w.tobytes()
     assert np.isnan(got[0]).any() and np.isfinite(got[0]).any()
+
+
+def test_region_planes_iterate_on_inliers_and_solve_where_wanted(rng):
+    """Three fits, each through the kept pixels within ``inlier`` of the last fit's plane
+    (weighed inside the kernel), give the reference's bytes at every wanted pixel; a run
+    of a block's row with no wanted pixel is left NaN (not solved), and without ``wanted``
+    every pixel is solved."""
+    from vsmatch._kernels.planes import COLUMN_BLOCK
+    from vsmatch.aggregation import keep_arms_inside
+    from vsmatch.planes import MIN_SPREAD, region_planes
+
+    height, width = 21, 3 * COLUMN_BLOCK + 3
+    ys, xs = np.mgrid[0:height, 0:width].astype(np.float32)
+    disp = (0.2 * xs - 0.1 * ys + 10).astype(np.float32)
+    outliers = rng.random((height, width)) < 0.15
+    disp[outliers] += rng.uniform(-6, 6, int(outliers.sum())).astype(np.float32)
+    kept = rng.random((height, width)) < 0.8
+    arms = rng.integers(0, 6, (4, height, width)).astype(np.uint8)
+    keep_arms_inside(arms)
+    wanted = np.zeros((height, width), bool)
+    wanted[3, 5] = wanted[10, COLUMN_BLOCK + 2:COLUMN_BLOCK + 9] = True
+
+    plane = None
+    for _ in range(3):
+        weight = kept if plane is None else kept & (np.abs(disp - plane) <= 1.0)
+        sums = reference.region_moment_sums(
+            reference.plane_moments(disp, weight.astype(np.float32)), arms)
+        plane, spread = reference.plane_values(sums, 0.3, MIN_SPREAD)
+    got, got_spread = region_planes(disp, kept, arms, 3, 0.3, 1.0, wanted)
+    assert got[wanted].tobytes() == plane[wanted].tobytes()
+    assert got_spread[wanted].tobytes() == spread[wanted].tobytes()
+    unsolved = np.ones((height, width), bool)
+    unsolved[3, :COLUMN_BLOCK] = unsolved[10, COLUMN_BLOCK:2 * COLUMN_BLOCK] = False
+    assert np.isnan(got[unsolved]).all() and np.isfinite(got[~unsolved]).any()
+    everywhere, _ = region_planes(disp, kept, arms, 3, 0.3, 1.0)
+    assert everywhere.tobytes() == plane.tobytes()
+    assert (np.abs(disp - plane) > 1.0)[kept & np.isfinite(plane)].any()  # outliers left
 
 
 def test_reference_region_sums_add_each_cross_region(rng):

@@ -80,19 +80,26 @@ def moment_blocks(shape: tuple[int, int]) -> np.ndarray:
 
 
 def region_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, iterations: int,
-                  min_share: float, inlier: float) -> tuple[np.ndarray, np.ndarray]:
+                  min_share: float, inlier: float, wanted: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Each pixel's cross region's least-squares plane at the pixel, through the region's
     ``kept`` pixels, and their spread about it (NaN where they are fewer than ``min_share``
     of the region); ``iterations`` fits, each on the kept pixels within ``inlier`` of the
-    last plane."""
-    weight = kept.astype(np.float32)
+    last plane. ``wanted``: where the caller reads the result (None: everywhere); the last
+    fit is solved only near those pixels, NaN elsewhere."""
+    kept = np.ascontiguousarray(kept, dtype=bool)
+    wanted = (np.ones(disp.shape, bool) if wanted is None
+              else np.ascontiguousarray(wanted, dtype=bool))
     scratch = moment_blocks(disp.shape)
-    plane = np.empty(disp.shape, np.float32)
+    # The planes of one fit are the next one's "last": two buffers, taken in turn.
+    planes = [np.empty(disp.shape, np.float32) for _ in range(2)]
+    last = np.empty((0, 0), np.float32)  # the first fit: every kept pixel
     spread = np.empty(disp.shape, np.float32)
     for fit in range(iterations):
-        if fit > 0:  # the next fit: the kept pixels near the last plane
-            with np.errstate(invalid="ignore"):
-                weight = (kept & (np.abs(disp - plane) <= inlier)).astype(np.float32)
-        fit_region_planes(disp, weight, arms, np.float32(min_share), np.float32(MIN_SPREAD),
-                          scratch, plane, spread)
-    return plane, spread
+        plane = planes[fit % 2]
+        # A fit before the last is read at the kept pixels only (the next fit's inliers).
+        solve_at = wanted if fit == iterations - 1 else kept
+        fit_region_planes(disp, kept, last, np.float32(inlier), arms, np.float32(min_share),
+                          np.float32(MIN_SPREAD), solve_at, scratch, plane, spread)
+        last = plane
+    return last, spread

@@ -94,7 +94,7 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     kept = (in_shadow(grey, s.levels, s.shadow, s.shadow_window) & ~flat
             if s.shadow is not None else np.zeros(disp.shape, bool))
     was_unsure = ((confidence < _shrunk(s.take, contrast, s.take_contrast)) | flat) & ~kept
-    plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier)
+    plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier, was_unsure)
     take = close & was_unsure
     # The views' census and gradients, made once for every cost taken below.
     terms = functools.cache(lambda: pair_cost_terms(left, right, cfg.cost, colour_weight))
@@ -128,7 +128,8 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
         confidence[across] = np.maximum(confidence[across], np.float32(s.bridge_confidence))
     if long_arms is not None:
         # No cost check: these pixels are unsure because their costs tell little.
-        plane, close = _close_planes(disp, sure, long_arms, s, s.min_share, s.inlier)
+        plane, close = _close_planes(disp, sure, long_arms, s, s.min_share, s.inlier,
+                                     was_unsure)
         late = close & was_unsure & ~take & ~across
         out[late] = plane[late]
         take |= late
@@ -137,7 +138,8 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
         # below), not a plane taken from these same regions, which would agree with itself.
         witness = np.where(across, out, disp)
         filled = sure | take | across
-        plane, close = _close_planes(out, filled, arms, s, s.refit_share, s.refit_inlier)
+        plane, close = _close_planes(out, filled, arms, s, s.refit_share, s.refit_inlier,
+                                     was_unsure)
         settle = was_unsure & close
         with np.errstate(invalid="ignore"):
             # Two witnesses, the pixel's own and its region's plane: where they agree the
@@ -145,7 +147,7 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
             agree = settle & (np.abs(plane - witness) <= s.refit_agree)
         if long_arms is not None:
             wider, wider_close = _close_planes(out, filled, long_arms, s, s.refit_share,
-                                               s.refit_inlier)
+                                               s.refit_inlier, was_unsure)
             plane = np.where(close, plane, wider)
             settle |= was_unsure & wider_close
         out[settle] = plane[settle]
@@ -186,10 +188,12 @@ def _segment_planes(out: np.ndarray, confidence: np.ndarray, left: np.ndarray,
 
 
 def _close_planes(disp: np.ndarray, kept: np.ndarray, arms: np.ndarray, s: SurfacesConfig,
-                  share: float, inlier: float) -> tuple[np.ndarray, np.ndarray]:
+                  share: float, inlier: float, wanted: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Each pixel's region's plane through its ``kept`` pixels (``planes.region_planes``),
-    and where the region has one and spreads at most ``s.max_spread`` about it."""
-    plane, spread = region_planes(disp, kept, arms, s.iterations, share, inlier)
+    and where the region has one and spreads at most ``s.max_spread`` about it: at the
+    ``wanted`` pixels (the only ones read; elsewhere NaN and False, or a plane)."""
+    plane, spread = region_planes(disp, kept, arms, s.iterations, share, inlier, wanted)
     with np.errstate(invalid="ignore"):
         return plane, np.isfinite(plane) & (spread <= s.max_spread)
 

@@ -98,22 +98,27 @@ COLUMN_BLOCK = 16
 
 
 @njit(**ROW_OPTIONS)
-def _row_moment_sums(disp, weight, arms, scratch, y, m, sums):
+def _row_moment_sums(disp, kept, last, inlier, arms, scratch, y, m, sums):
     """:func:`fit_region_planes`' row pass of row ``y``: each pixel's moments summed over its
     horizontal arms (left, right) into its block's ``scratch[x // COLUMN_BLOCK, y]``, by
     running sums in float64 (``m``: a pixel's moments, ``sums``: (W + 1,
-    :data:`N_MOMENTS`), room for them)."""
-    disp, weight, arms, scratch = borrowed(disp), borrowed(weight), borrowed(arms), \
+    :data:`N_MOMENTS`), room for them). A pixel weighs 1 where ``kept`` and, given the
+    ``last`` fit's planes, within ``inlier`` of its own; 0 elsewhere."""
+    disp, kept, arms, scratch = borrowed(disp), borrowed(kept), borrowed(arms), \
         borrowed(scratch)
-    m, sums = borrowed(m), borrowed(sums)
+    last, m, sums = borrowed(last), borrowed(m), borrowed(sums)
     height, width = disp.shape
     # As float32, the centre the moments were always taken about.
     cx = np.float32((width - 1) / 2.0)
     cy = np.float32((height - 1) / 2.0)
     v = np.float32(y) - cy
     sums[0, :] = 0.0
+    near_last = last.shape[0] > 0
     for x in range(width):
-        _pixel_moments(disp[y, x], weight[y, x], np.float32(x) - cx, v, m)
+        d = disp[y, x]
+        inside = kept[y, x] and (not near_last or np.abs(d - last[y, x]) <= inlier)
+        _pixel_moments(d, np.float32(1.0) if inside else np.float32(0.0),
+                       np.float32(x) - cx, v, m)
         for k in range(N_MOMENTS):
             sums[x + 1, k] = sums[x, k] + m[k]
     for x in range(width):
@@ -125,16 +130,18 @@ def _row_moment_sums(disp, weight, arms, scratch, y, m, sums):
 
 
 @njit(**ROW_OPTIONS)
-def _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread, block, sums,
-                         running, ends):
+def _column_block_planes(scratch, arms, min_weight, min_spread, wanted, plane, spread, block,
+                         sums, running, ends):
     """:func:`fit_region_planes`' column pass of columns ``block`` * :data:`COLUMN_BLOCK`
     on: the row sums (the block's ``scratch[block]``, its rows one after another in
     memory) summed over each pixel's vertical arms (up, down), by running sums in float64
     side by side in memory (``sums``: (H + 1) x the block's columns x :data:`N_MOMENTS`,
     flat, room for them; ``running``: room for a row of them), and each pixel's plane
-    solved (``ends``: (2, :data:`COLUMN_BLOCK`) uint32, room for a row's regions' ends)."""
+    solved where a pixel of its row of the block is ``wanted`` (NaN, NaN elsewhere; ``ends``:
+    (2, :data:`COLUMN_BLOCK`) uint32, room for a row's regions' ends)."""
     scratch, arms, plane, spread = borrowed(scratch), borrowed(arms), borrowed(plane), \
         borrowed(spread)
+    wanted = borrowed(wanted)
     flat, running, ends = borrowed(sums), borrowed(running), borrowed(ends)
     height, width = plane.shape
     cx = (width - 1) / 2.0
@@ -161,7 +168,16 @@ def _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread, b
     # of 32 bits: a block's sums hold (H + 1) x 16 x 11 values; unsigned, so that the
     # solve's reads take no wrap-around test).
     lo, hi = ends[0], ends[1]
+    nan = np.float32(np.nan)
     for y in range(height):
+        asked = False
+        for j in range(n):
+            asked |= wanted[y, x0 + j]
+        if not asked:  # a solve is a third of the fit: none for a run that no one reads
+            for j in range(n):
+                plane[y, x0 + j] = nan
+                spread[y, x0 + j] = nan
+            continue
         for j in range(n):
             lo[j] = np.uint32(((y - np.int32(arms[2, y, x0 + j])) * n + j) * N_MOMENTS)
             hi[j] = np.uint32(((y + np.int32(arms[3, y, x0 + j]) + 1) * n + j) * N_MOMENTS)
@@ -173,14 +189,18 @@ def _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread, b
 
 
 @njit(**KERNEL_OPTIONS)
-def fit_region_planes(disp, weight, arms, min_weight, min_spread, scratch, plane, spread):
+def fit_region_planes(disp, kept, last, inlier, arms, min_weight, min_spread, wanted, scratch,
+                      plane, spread):
     """The least-squares plane d = a u + b v + c through each pixel's cross region (the
-    horizontal arms (left, right) of the pixels on its vertical arm (up, down)), weighted
-    by ``weight`` (0 where ``disp`` is not finite), evaluated at the pixel (``plane``), and
-    the standard deviation of the region's disparities about it (``spread``); NaN where the
-    region's weight is below ``min_weight`` of its pixels. Where its pixels do not span a
-    plane (the variance along u or v below ``min_spread``) a constant is fitted along that
-    axis. u, v are the pixel's coordinates from the image centre.
+    horizontal arms (left, right) of the pixels on its vertical arm (up, down)), through the
+    region's ``kept`` pixels with a finite ``disp`` (given the ``last`` fit's planes, (H, W),
+    those within ``inlier`` of their own; an empty (0, 0) array: every kept pixel),
+    evaluated at the pixel (``plane``), and the standard deviation of the region's
+    disparities about it (``spread``); NaN where the region's weight is below ``min_weight``
+    of its pixels. Where its pixels do not span a plane (the variance along u or v below
+    ``min_spread``) a constant is fitted along that axis. u, v are the pixel's coordinates
+    from the image centre. Solved only within :data:`COLUMN_BLOCK` columns of a ``wanted``
+    pixel of its row (NaN further off).
 
     The region's moments (:data:`N_MOMENTS`) are summed by running sums along each row
     into ``scratch`` (blocks, H, :data:`COLUMN_BLOCK`, N_MOMENTS; ``planes.moment_blocks``),
@@ -192,12 +212,12 @@ def fit_region_planes(disp, weight, arms, min_weight, min_spread, scratch, plane
     for y in prange(height):
         m = np.empty(N_MOMENTS, np.float32)
         sums = np.empty((width + 1, N_MOMENTS))
-        _row_moment_sums(disp, weight, arms, scratch, np.int64(y), m, sums)
+        _row_moment_sums(disp, kept, last, inlier, arms, scratch, np.int64(y), m, sums)
     for block in prange((width + COLUMN_BLOCK - 1) // COLUMN_BLOCK):
         sums = np.empty((height + 1) * COLUMN_BLOCK * N_MOMENTS)
         running = np.empty(COLUMN_BLOCK * N_MOMENTS)
         ends = np.empty((2, COLUMN_BLOCK), np.uint32)
-        _column_block_planes(scratch, arms, min_weight, min_spread, plane, spread,
+        _column_block_planes(scratch, arms, min_weight, min_spread, wanted, plane, spread,
                              np.int64(block), sums, running, ends)
 
 
