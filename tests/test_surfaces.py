@@ -378,3 +378,15 @@ def test_an_unsure_block_in_a_shadow_keeps_its_own_match(pair):
     inner = (slice(BLOCK[0].start + 4, BLOCK[0].stop - 4),
              slice(BLOCK[1].start + 4, BLOCK[1].stop - 4))
     assert np.mean(np.abs(filled[inner] - pair.disparity[inner]) <= 1.0) > 0.95
+
+
+def test_the_shadows_median_level_is_numpys_median(rng):
+    """The view's median grey level read from its histogram is ``np.median``'s, the mean of
+    the two middle levels of an even count included."""
+    from vsmatch.surfaces import _median_level
+
+    for size in (1, 2, 7, 10, 4001):
+        for step in (1, 64):
+            grey = (rng.integers(0, 256, (1, size)) // step * step).astype(np.uint8)
+            assert _median_level(grey) == float(np.median(grey))
+    assert _median_level(np.array([[10, 13]], np.uint8)) == 11.5

@@ -236,10 +236,10 @@ def _bottom_edge_extension(sure: np.ndarray, unsure: np.ndarray, reach: int) -> 
     of the view (a shelf's board) has only one side to bridge from."""
     height, width = sure.shape
     known = np.isfinite(sure)
-    # Whether a sure pixel lies at or below each pixel of its column.
-    sure_below = np.flip(np.logical_or.accumulate(np.flip(known, 0), axis=0), 0)
     # The last sure row of each column (-1: none), and the one EDGE_LEVEL_ROWS above it.
     anchor = np.where(known.any(axis=0), height - 1 - np.argmax(known[::-1], axis=0), -1)
+    # Whether a sure pixel lies at or below each pixel of its column: up to that row.
+    sure_below = np.arange(height)[:, None] <= anchor[None, :]
     columns = np.arange(width)
     bottom = sure[np.maximum(anchor, 0), columns]
     top = sure[np.maximum(anchor - EDGE_LEVEL_ROWS, 0), columns]
@@ -263,7 +263,7 @@ def in_shadow(view: np.ndarray, levels: int, share: float, window: int) -> np.nd
     median, or, within the box's reach of such a place, over a cell and its neighbours. A
     view dark all over has no shadow: its median is dark too."""
     grey = grey_levels(view)
-    median = max(1.0, float(np.median(grey)))
+    median = max(1.0, _median_level(grey))
     reduced = grey.astype(np.float32)
     for _ in range(levels):
         reduced = cv2.pyrDown(reduced)
@@ -279,6 +279,14 @@ def in_shadow(view: np.ndarray, levels: int, share: float, window: int) -> np.nd
     # half a cell further out than a comparison on the cells would.
     dimmed = np.minimum(dimmed, np.float32(1.0))
     return cv2.resize(dimmed, view.shape[1::-1], interpolation=cv2.INTER_LINEAR) < 1.0
+
+
+def _median_level(grey: np.ndarray) -> float:
+    """``np.median`` of a uint8 view, from its histogram (no sort of the pixels): the mean
+    of the two middle levels of an even count."""
+    below = np.cumsum(np.bincount(grey.ravel(), minlength=256))
+    middle = np.searchsorted(below, [(grey.size - 1) // 2 + 1, grey.size // 2 + 1])
+    return float(middle.mean())
 
 
 def _shrunk(value: float, contrast: float, reference: float | None) -> float:
