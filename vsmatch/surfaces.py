@@ -128,9 +128,10 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
         confidence[across] = np.maximum(confidence[across], np.float32(s.bridge_confidence))
     if long_arms is not None:
         # No cost check: these pixels are unsure because their costs tell little.
+        left_over = was_unsure & ~take & ~across
         plane, close = _close_planes(disp, sure, long_arms, s, s.min_share, s.inlier,
-                                     was_unsure)
-        late = close & was_unsure & ~take & ~across
+                                     left_over)
+        late = close & left_over
         out[late] = plane[late]
         take |= late
     if s.refit:
@@ -147,7 +148,7 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
             agree = settle & (np.abs(plane - witness) <= s.refit_agree)
         if long_arms is not None:
             wider, wider_close = _close_planes(out, filled, long_arms, s, s.refit_share,
-                                               s.refit_inlier, was_unsure)
+                                               s.refit_inlier, was_unsure & ~close)
             plane = np.where(close, plane, wider)
             settle |= was_unsure & wider_close
         out[settle] = plane[settle]
