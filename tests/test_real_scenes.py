@@ -201,6 +201,36 @@ def test_rejected_pixels_take_their_regions_plane(rng):
     assert np.abs(out - truth)[kept].max() < 0.05  # kept pixels on the plane stay on it
 
 
+
+def test_the_planes_row_blocks_share_one_room_for_their_sums(rng, monkeypatch):
+    """Row blocks of unequal heights, their row sums in one room the blocks share (left
+    holding NaN, and the last block's shorter): the bytes of each block given room of its
+    own."""
+    left, right, truth = slanted_pair(rng, cell=24, levels=(110, 140))
+    labels = np.full(truth.shape, VALID, np.uint8)
+    disp = truth + rng.normal(0, 0.3, truth.shape).astype(np.float32)
+    labels[rng.random(truth.shape) < 0.2] = MISMATCHED
+    cfg = load_config("default")
+    monkeypatch.setattr(planes, "PLANE_ROWS", truth.shape[0] // 3 + 5)
+    heights = {y1 - y0 for _, _, y0, y1 in planes.row_blocks(truth.shape[0], planes.PLANE_ROWS,
+                                                             cfg.planes.l2)}
+    assert len(heights) > 1
+    rooms = []
+
+    def poisoned(shape):
+        rooms.append(np.full(np.prod(planes._moment_shape(shape)), np.nan, np.float32))
+        return rooms[-1]
+
+    monkeypatch.setattr(planes, "moment_room", poisoned)
+    shared = planes.fit_planes(disp, labels, left, cfg.arms, cfg.planes)
+    assert len(rooms) == 1
+    region_planes = planes.region_planes
+    monkeypatch.setattr(planes, "region_planes",
+                        lambda *args, room=None: region_planes(*args))
+    own = planes.fit_planes(disp, labels, left, cfg.arms, cfg.planes)
+    assert (shared != disp).any() and np.isfinite(shared).all()
+    assert shared.tobytes() == own.tobytes()
+
 # --- photometric field ------------------------------------------------------------------------
 
 def test_the_field_takes_out_vignetting_the_global_map_cannot(rng):
