@@ -173,7 +173,7 @@ def _column_block_planes(scratch, arms, min_weight, min_spread, wanted, plane, s
         asked = False
         for j in range(n):
             asked |= wanted[y, x0 + j]
-        if not asked:  # a solve is a third of the fit: none for a run that no one reads
+        if not asked:  # the solve is over a quarter of the fit: none where no one reads it
             for j in range(n):
                 plane[y, x0 + j] = nan
                 spread[y, x0 + j] = nan
@@ -199,8 +199,8 @@ def fit_region_planes(disp, kept, last, inlier, arms, min_weight, min_spread, wa
     disparities about it (``spread``); NaN where the region's weight is below ``min_weight``
     of its pixels. Where its pixels do not span a plane (the variance along u or v below
     ``min_spread``) a constant is fitted along that axis. u, v are the pixel's coordinates
-    from the image centre. Solved only within :data:`COLUMN_BLOCK` columns of a ``wanted``
-    pixel of its row (NaN further off).
+    from the image centre. Solved only in the rows of a block of :data:`COLUMN_BLOCK`
+    columns that hold a ``wanted`` pixel (NaN elsewhere).
 
     The region's moments (:data:`N_MOMENTS`) are summed by running sums along each row
     into ``scratch`` (blocks, H, :data:`COLUMN_BLOCK`, N_MOMENTS; ``planes.moment_blocks``),
