@@ -6,8 +6,9 @@ and on Middlebury 2014, KITTI and ETH3D: the pixels whose final disparity lies 2
 from the aggregated costs' winner, split by that winner's left-right check (tolerance 1)
 and its margin (the second least cost at least 2 px away, less the least, over the curve's
 mean less its least); per group the count, the share the final disparity gets right and the
-share the aggregated winner gets right (each dataset's headline threshold, non-occluded
-pixels with truth). Written to see whether a confidence cap could find the fence's filled
+share the aggregated winner gets right (each dataset's headline measure on its evaluated
+pixels with truth, as ``vsmatch eval``; the fence: bad 1.0 on its pixels seen in both
+views). Written to see whether a confidence cap could find the fence's filled
 holes (docs/results.md, "A chain-link fence").
 
     python scripts/overruled_pixels.py [--data-root DIR]
@@ -23,7 +24,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vsmatch import datasets, disparity, level, pipeline  # noqa: E402
+from vsmatch import datasets, disparity, evaluation, level, pipeline  # noqa: E402
 from vsmatch.config import load_config  # noqa: E402
 from vsmatch.synthetic import fence_pair  # noqa: E402
 
@@ -40,9 +41,10 @@ def _capturing(volume, *args, **kwargs):
     return _SCANLINE(volume, *args, **kwargs)
 
 
-def overruled(left, right, max_disp, truth, valid, threshold, cfg):
-    """The number of overruled pixels and, per group, (name, count, % final right, %
-    aggregated right); None where the match did not search the whole range at full size."""
+def overruled(left, right, max_disp, truth, valid, scoring, cfg):
+    """The number of overruled ``valid`` pixels and, per group, (name, count, % final
+    right, % aggregated right) by ``scoring``'s headline measure; None where the match did
+    not search the whole range at full size."""
     CAPTURED.clear()
     final = pipeline.run(left, right, max_disp=max_disp, config=cfg).disparity
     aggregated = CAPTURED.get("aggregated")
@@ -52,8 +54,8 @@ def overruled(left, right, max_disp, truth, valid, threshold, cfg):
     raw_ok = disparity.left_right_check(raw_l, raw_r, n_disp=aggregated.shape[2],
                                         tolerance=1) == disparity.VALID
     over = valid & np.isfinite(final) & (np.abs(final - raw_l) >= 2)
-    final_right = np.abs(final - truth) <= threshold
-    raw_right = np.abs(raw_l - truth) <= threshold
+    final_right = ~scoring.bad_map(final, truth)
+    raw_right = ~scoring.bad_map(raw_l.astype(np.float32), truth)
     candidates = np.arange(aggregated.shape[2])[None, None, :]
     best = np.take_along_axis(aggregated, raw_l[..., None], -1)[..., 0]
     second = np.where(np.abs(candidates - raw_l[..., None]) >= 2, aggregated, np.inf).min(-1)
@@ -86,18 +88,18 @@ def main() -> None:
     for spacing in (45, 32):
         pair = fence_pair(spacing=spacing)
         count, rows = overruled(pair.left, pair.right, pair.max_disp, pair.disparity,
-                                np.isfinite(pair.disparity) & pair.nonocc, 1.0, cfg)
+                                np.isfinite(pair.disparity) & pair.nonocc,
+                                evaluation.Scoring.bad(1.0), cfg)
         print(f"fence, holes {spacing} px: {count} overruled")
         _print(rows)
     for name in ("middlebury2014-quarter", "kitti2015", "eth3d"):
-        threshold = 3.0 if name.startswith("kitti") else (2.0 if "2014" in name else 1.0)
+        scoring = evaluation.scoring_for(name)
         totals: dict[str, list[float]] = {}
         for scene in datasets.load_dataset(name, args.data_root):
-            mask = scene.masks["nonocc"] if "nonocc" in scene.masks else scene.masks["all"]
             truth = scene.ground_truth
-            valid = np.isfinite(truth) & (truth > 0) & mask.astype(bool)
+            valid = evaluation.headline_mask(scene) & np.isfinite(truth)
             found = overruled(scene.left, scene.right, scene.max_disp, truth, valid,
-                              threshold, cfg)
+                              scoring, cfg)
             for group, n, final_right, raw_right in ([] if found is None else found[1]):
                 total = totals.setdefault(group, [0, 0.0, 0.0])
                 total[0] += n
