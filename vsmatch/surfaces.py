@@ -251,9 +251,15 @@ def _bottom_edge_extension(sure: np.ndarray, unsure: np.ndarray, reach: int) -> 
     return np.where(ends, bottom[None, :], np.nan).astype(np.float32)
 
 
+def _levels_at_or_below(grey: np.ndarray) -> np.ndarray:
+    """How many of a uint8 view's pixels lie at or below each grey level (256,): its
+    percentiles without a sort of the pixels."""
+    return np.cumsum(np.bincount(grey.ravel(), minlength=256))
+
+
 def view_contrast(view: np.ndarray) -> float:
     """The spread of a view's grey levels: its 90th percentile less its 10th."""
-    counts = np.cumsum(np.bincount(grey_levels(view).ravel(), minlength=256))
+    counts = _levels_at_or_below(grey_levels(view))
     low, high = np.searchsorted(counts, [0.1 * counts[-1], 0.9 * counts[-1]])
     return float(high - low)
 
@@ -283,9 +289,9 @@ def in_shadow(view: np.ndarray, levels: int, share: float, window: int) -> np.nd
 
 
 def _median_level(grey: np.ndarray) -> float:
-    """``np.median`` of a uint8 view, from its histogram (no sort of the pixels): the mean
-    of the two middle levels of an even count."""
-    below = np.cumsum(np.bincount(grey.ravel(), minlength=256))
+    """``np.median`` of a uint8 view, from its histogram: the mean of the two middle
+    levels of an even count."""
+    below = _levels_at_or_below(grey)
     middle = np.searchsorted(below, [(grey.size - 1) // 2 + 1, grey.size // 2 + 1])
     return float(middle.mean())
 
