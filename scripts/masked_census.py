@@ -4,7 +4,9 @@ like the centre, run through another script (docs/results.md, "A chain-link fenc
 A neighbour whose grey level differs from the centre's by more than ``--threshold`` is left
 out of the left pixel's Hamming distance, which is then scaled back to the whole window
 (``--hamming scaled``), counted as it is (``raw``) or given a quarter of the left-out bits as
-differing (``prior``). ``--both``: the right pixel's mask too. ``--like-contrast C``: no mask
+differing (``prior``), or the smaller of the scaled and the plain distance (``least``: a
+blank pixel's like neighbours are noise, and it keeps the edge the plain census sees).
+``--both``: the right pixel's mask too. ``--like-contrast C``: no mask
 where the like neighbours differ from the centre by less than C grey levels on average.
 Full-range cost volumes only (the band search's are as they are), in NumPy: slow, but the
 same volume otherwise (with ``--threshold 0`` the script's figures are the method's).
@@ -84,6 +86,9 @@ def masked_cost_volume(args: argparse.Namespace):
             counted = np.bitwise_count(differing & mask).astype(np.float64)
             if args.hamming == "scaled":
                 hamming = np.where(kept > 0, counted * n_bits / np.maximum(kept, 1), plain)
+            elif args.hamming == "least":  # the plain distance where it is the smaller
+                scaled = np.where(kept > 0, counted * n_bits / np.maximum(kept, 1), plain)
+                hamming = np.minimum(scaled, plain)
             elif args.hamming == "prior":
                 hamming = counted + (n_bits - kept) * 0.25
             else:
@@ -98,7 +103,7 @@ def masked_cost_volume(args: argparse.Namespace):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--threshold", type=float, required=True)
-    parser.add_argument("--hamming", choices=("scaled", "raw", "prior"), default="scaled")
+    parser.add_argument("--hamming", choices=("scaled", "raw", "prior", "least"), default="scaled")
     parser.add_argument("--both", action="store_true")
     parser.add_argument("--like-contrast", type=float, default=0.0)
     parser.add_argument("script")
