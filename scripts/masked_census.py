@@ -6,8 +6,9 @@ out of the left pixel's Hamming distance, which is then scaled back to the whole
 (``--hamming scaled``), counted as it is (``raw``) or given a quarter of the left-out bits as
 differing (``prior``), or the smaller of the scaled and the plain distance (``least``: a
 blank pixel's like neighbours are noise, and it keeps the edge the plain census sees).
-``--both``: the right pixel's mask too. ``--like-contrast C``: no mask
-where the like neighbours differ from the centre by less than C grey levels on average.
+``--both``: the right pixel's mask too; ``--colour``: like in every channel.
+``--like-contrast C``: no mask where the like neighbours differ from the centre by less than
+C grey levels on average.
 Full-range cost volumes only (the band search's are as they are), in NumPy: slow, but the
 same volume otherwise (with ``--threshold 0`` the script's figures are the method's).
 
@@ -32,15 +33,20 @@ from vsmatch import cost  # noqa: E402
 from vsmatch.images import to_grey  # noqa: E402
 
 
-def like_neighbours(grey: np.ndarray, width: int, height: int, threshold: float,
+def like_neighbours(view: np.ndarray, width: int, height: int, threshold: float,
                     like_contrast: float) -> np.ndarray:
     """Each pixel's mask of the census bits (the census's bit order) whose neighbour lies
-    within ``threshold`` grey levels of it; every bit where the like neighbours differ from
-    it by less than ``like_contrast`` on average."""
-    grey = np.ascontiguousarray(grey, dtype=np.float32)
+    within ``threshold`` grey levels of it (of each channel's, for a colour ``view`` (H, W,
+    C)); every bit where the like neighbours differ from it by less than ``like_contrast``
+    on average."""
+    view = np.ascontiguousarray(view, dtype=np.float32)
+    if view.ndim == 2:
+        view = view[:, :, None]
     half_w, half_h = width // 2, height // 2
-    padded = cv2.copyMakeBorder(grey, half_h, half_h, half_w, half_w, cv2.BORDER_REPLICATE)
-    rows, cols = grey.shape
+    padded = cv2.copyMakeBorder(view, half_h, half_h, half_w, half_w, cv2.BORDER_REPLICATE)
+    if padded.ndim == 2:
+        padded = padded[:, :, None]
+    rows, cols = view.shape[:2]
     n_bits = width * height - 1
     mask = np.zeros((rows, cols), np.uint64)
     spread = np.zeros((rows, cols), np.float32)
@@ -50,7 +56,7 @@ def like_neighbours(grey: np.ndarray, width: int, height: int, threshold: float,
         for dx in range(width):
             if dy == half_h and dx == half_w:
                 continue
-            difference = np.abs(padded[dy:dy + rows, dx:dx + cols] - grey)
+            difference = np.abs(padded[dy:dy + rows, dx:dx + cols] - view).max(axis=2)
             like = difference <= threshold
             mask |= like.astype(np.uint64) << np.uint64(n_bits - 1 - k)
             spread += np.where(like, difference, 0)
@@ -73,7 +79,8 @@ def masked_cost_volume(args: argparse.Namespace):
             return volume
         width, height = cfg.census_width, cfg.census_height
         n_bits = width * height - 1
-        masks = [like_neighbours(to_grey(view), width, height, args.threshold,
+        masks = [like_neighbours(view if args.colour else to_grey(view), width, height,
+                                 args.threshold,
                                  args.like_contrast)
                  for view in ((colour_l, colour_r) if args.both else (colour_l,))]
         table = cost.rho(np.arange(n_bits + 1), cfg.lambda_census).astype(np.float32)
@@ -105,6 +112,8 @@ def main() -> None:
     parser.add_argument("--threshold", type=float, required=True)
     parser.add_argument("--hamming", choices=("scaled", "raw", "prior", "least"), default="scaled")
     parser.add_argument("--both", action="store_true")
+    parser.add_argument("--colour", action="store_true",
+                        help="like in every channel, not in grey")
     parser.add_argument("--like-contrast", type=float, default=0.0)
     parser.add_argument("script")
     parser.add_argument("arguments", nargs=argparse.REMAINDER)
