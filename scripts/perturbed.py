@@ -7,7 +7,10 @@ explains. Per dataset: the mean headline figure (as ``vsmatch eval`` reports it)
 variant, and every scene whose figure rises by more than ``--flag`` points in either.
 
     python scripts/perturbed.py CONFIG [CONFIG ...] [--sigma 1] [--cut 3] [--flag 2]
-        [--datasets middlebury2 ...] [--data-root DIR] [--set section.key=value]
+        [--seed 0] [--datasets middlebury2 ...] [--data-root DIR] [--set section.key=value]
+
+``--seed``: the noise's seeds start there (scene i's views take 2 (seed + i) and
+2 (seed + i) + 1).
 """
 
 from __future__ import annotations
@@ -48,6 +51,7 @@ def main() -> None:
     parser.add_argument("--sigma", type=float, default=1.0)
     parser.add_argument("--cut", type=int, default=3)
     parser.add_argument("--flag", type=float, default=2.0)
+    parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--datasets", nargs="+", default=list(DATASETS))
     parser.add_argument("--set", dest="changes", action="append", default=[],
                         metavar="section.key=value", help="applied to every config")
@@ -57,8 +61,8 @@ def main() -> None:
     labels = ("as is", f"noise {args.sigma:g}", f"cut {args.cut}")
     for dataset in args.datasets:
         scenes = datasets.load_dataset(dataset, args.data_root)
-        variants = (scenes, [with_noise(s, args.sigma, i) for i, s in enumerate(scenes)],
-                    [cut_left(s, args.cut) for s in scenes])
+        noisy = [with_noise(s, args.sigma, args.seed + i) for i, s in enumerate(scenes)]
+        variants = (scenes, noisy, [cut_left(s, args.cut) for s in scenes])
         figures = [evaluation.evaluate(v, methods, dataset=dataset) for v in variants]
         for name in methods:
             per_scene = [evaluation.headline_figures(report, name) for report in figures]
