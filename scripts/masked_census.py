@@ -8,7 +8,8 @@ differing (``prior``), or the smaller of the scaled and the plain distance (``le
 blank pixel's like neighbours are noise, and it keeps the edge the plain census sees).
 ``--both``: the right pixel's mask too; ``--colour``: like in every channel.
 ``--like-contrast C``: no mask where the like neighbours differ from the centre by less than
-C grey levels on average.
+C grey levels on average. ``--min-like F``: no mask where fewer than F of the neighbours are
+like (a thin thing in the window, not an edge across it).
 Full-range cost volumes only (the band search's are as they are), in NumPy: slow, but the
 same volume otherwise (with ``--threshold 0`` the script's figures are the method's).
 
@@ -90,6 +91,9 @@ def masked_cost_volume(args: argparse.Namespace):
             mask = masks[0][:, d:] if len(masks) == 1 else masks[0][:, d:] & masks[1][:, :cols - d]
             plain = np.bitwise_count(differing)
             kept = np.bitwise_count(mask).astype(np.float64)
+            if args.min_like > 0:  # too few like neighbours: the plain distance
+                mask = np.where(kept < args.min_like * n_bits, ~np.uint64(0), mask)
+                kept = np.bitwise_count(mask & np.uint64((1 << n_bits) - 1)).astype(np.float64)
             counted = np.bitwise_count(differing & mask).astype(np.float64)
             if args.hamming == "scaled":
                 hamming = np.where(kept > 0, counted * n_bits / np.maximum(kept, 1), plain)
@@ -115,6 +119,8 @@ def main() -> None:
     parser.add_argument("--colour", action="store_true",
                         help="like in every channel, not in grey")
     parser.add_argument("--like-contrast", type=float, default=0.0)
+    parser.add_argument("--min-like", type=float, default=0.0,
+                        help="the plain distance where fewer of the neighbours are like")
     parser.add_argument("script")
     parser.add_argument("arguments", nargs=argparse.REMAINDER)
     args = parser.parse_args()
