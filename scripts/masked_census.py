@@ -5,7 +5,9 @@ A neighbour whose grey level differs from the centre's by more than ``--threshol
 out of the left pixel's Hamming distance, which is then scaled back to the whole window
 (``--hamming scaled``), counted as it is (``raw``) or given a quarter of the left-out bits as
 differing (``prior``), or the smaller of the scaled and the plain distance (``least``: a
-blank pixel's like neighbours are noise, and it keeps the edge the plain census sees).
+blank pixel's like neighbours are noise, and it keeps the edge the plain census sees), or the
+plain distance with the unlike neighbours' differing bits counted at most at chance, half of
+them (``capped``).
 ``--both``: the right pixel's mask too; ``--colour``: like in every channel.
 ``--like-contrast C``: no mask where the like neighbours differ from the centre by less than
 C grey levels on average. ``--min-like F``: no mask where fewer than F of the neighbours are
@@ -102,6 +104,8 @@ def masked_cost_volume(args: argparse.Namespace):
                 hamming = np.minimum(scaled, plain)
             elif args.hamming == "prior":
                 hamming = counted + (n_bits - kept) * 0.25
+            elif args.hamming == "capped":  # the unlike bits count at most at chance
+                hamming = np.minimum(plain, counted + (n_bits - kept) * 0.5)
             else:
                 hamming = counted
             masked = (1.0 - np.exp(-hamming / cfg.lambda_census)).astype(np.float32)
@@ -114,7 +118,8 @@ def masked_cost_volume(args: argparse.Namespace):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--threshold", type=float, required=True)
-    parser.add_argument("--hamming", choices=("scaled", "raw", "prior", "least"), default="scaled")
+    parser.add_argument("--hamming", default="scaled",
+                        choices=("scaled", "raw", "prior", "least", "capped"))
     parser.add_argument("--both", action="store_true")
     parser.add_argument("--colour", action="store_true",
                         help="like in every channel, not in grey")
