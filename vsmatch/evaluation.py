@@ -381,6 +381,24 @@ def noisy_pair(scene: Scene, scene_index: int, level: float,
                  for k, view in enumerate((scene.left, scene.right)))
 
 
+def with_sensor_noise(scene: Scene, scene_index: int, sigma: float, seed: int = 0) -> Scene:
+    """``scene`` with sensor noise of ``sigma`` grey levels on each view (as
+    :func:`noisy_pair`): a change of the input too small to matter, which a method that
+    transfers reads about as the scene as it is (``scripts/perturbed.py``)."""
+    left, right = noisy_pair(scene, scene_index, sigma / 255.0, seed)
+    return dataclasses.replace(scene, left=left, right=right)
+
+
+def without_left_columns(scene: Scene, columns: int) -> Scene:
+    """``scene`` without the first ``columns`` columns of its views, ground truth and
+    masks: the content moves against the pixel grid and the image's border."""
+    def cut(array: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(array[:, columns:])
+    return dataclasses.replace(scene, left=cut(scene.left), right=cut(scene.right),
+                               ground_truth=cut(scene.ground_truth),
+                               masks={name: cut(mask) for name, mask in scene.masks.items()})
+
+
 def evaluate_noise(scenes: list[Scene], methods: dict, report: dict[str, Any], *,
                    levels: list[float], seeds: int,
                    on_done: Callable[[str, str], None] | None = None) -> dict[str, Any]:
