@@ -97,10 +97,10 @@ def masked_cost_volume(args: argparse.Namespace):
                 mask = np.where(kept < args.min_like * n_bits, ~np.uint64(0), mask)
                 kept = np.bitwise_count(mask & np.uint64((1 << n_bits) - 1)).astype(np.float64)
             counted = np.bitwise_count(differing & mask).astype(np.float64)
+            scaled = np.where(kept > 0, counted * n_bits / np.maximum(kept, 1), plain)
             if args.hamming == "scaled":
-                hamming = np.where(kept > 0, counted * n_bits / np.maximum(kept, 1), plain)
+                hamming = scaled
             elif args.hamming == "least":  # the plain distance where it is the smaller
-                scaled = np.where(kept > 0, counted * n_bits / np.maximum(kept, 1), plain)
                 hamming = np.minimum(scaled, plain)
             elif args.hamming == "prior":
                 hamming = counted + (n_bits - kept) * 0.25

@@ -52,11 +52,10 @@ def main() -> None:
                                   for f in figures)
             hard = "".join(f"; {scene} " + " / ".join(f"{f[scene]:.2f}" for f in figures)
                            for scene in figures[0] if scene in HARD)
-            rising = [f"{scene} {figures[0][scene]:.2f} -> "
-                      f"{max(figures[1][scene], figures[2][scene]):.2f}"
-                      for scene in figures[0]
-                      if max(figures[1][scene], figures[2][scene])
-                      > figures[0][scene] + args.flag]
+            changed = {scene: max(figures[1][scene], figures[2][scene]) for scene in figures[0]}
+            rising = [f"{scene} {figures[0][scene]:.2f} -> {worst:.2f}"
+                      for scene, worst in changed.items()
+                      if worst > figures[0][scene] + args.flag]
             print(f"{dataset} {name}: {' / '.join(labels)} {standard}{hard}"
                   + (f"; rising: {', '.join(rising)}" if rising else ""), flush=True)
 
