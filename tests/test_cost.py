@@ -89,3 +89,68 @@ def test_texture_is_eight_for_a_gradient_of_one_grey_level_a_pixel():
     inside = sensitivity.texture(ramp)[4:-4, 4:-4]
     assert np.allclose(inside, 8.0)
     assert np.all(sensitivity.texture(np.full((16, 16), 77, np.float32)) == 0)
+
+
+def _like_reference(colour, half_w, half_h, threshold):
+    """Each pixel's like neighbours in the census's bit order, directly."""
+    rows, cols = colour.shape[:2]
+    padded = np.pad(colour.astype(int), ((half_h, half_h), (half_w, half_w), (0, 0)),
+                    mode="edge")
+    out = np.zeros((rows, cols), np.uint64)
+    for y in range(rows):
+        for x in range(cols):
+            bits = 0
+            for dy in range(2 * half_h + 1):
+                for dx in range(2 * half_w + 1):
+                    if (dy, dx) == (half_h, half_w):
+                        continue
+                    near = np.abs(padded[y + dy, x + dx] - padded[y + half_h, x + half_w])
+                    bits = (bits << 1) | int(near.max() <= threshold)
+            out[y, x] = bits
+    return out
+
+
+@pytest.mark.parametrize("channels", [1, 3])
+def test_like_masks_match_reference(rng, channels):
+    colour = rng.integers(0, 60, size=(8, 11, channels), dtype=np.uint8)
+    cfg = CostConfig(census_width=5, census_height=3, census_like=20)
+    view = colour if channels == 3 else colour[..., 0]
+    np.testing.assert_array_equal(cost.like_masks(view, cfg),
+                                  _like_reference(colour, 2, 1, 20))
+
+
+@pytest.mark.parametrize("lam_ad", [None, 10.0])
+def test_census_over_like_neighbours_is_the_smaller_of_the_two_counts(rng, lam_ad):
+    """With ``cost.census_like`` the census term is that of the smaller of the plain
+    Hamming distance and the distance over the left pixel's like neighbours scaled to the
+    whole window; a threshold every neighbour meets gives the plain census."""
+    left = rng.integers(0, 256, size=(9, 14, 3), dtype=np.uint8)
+    left[:, 7:] //= 6  # a dark half: its neighbours like each other
+    right = np.roll(left, -2, axis=1)
+    gl, gr = (rng.random((9, 14), dtype=np.float32) * 100 for _ in range(2))
+    cl = cost.census_transform(left[..., 0].astype(np.float32))
+    cr = cost.census_transform(right[..., 0].astype(np.float32))
+    plain_cfg = CostConfig(lambda_census=15.0, lambda_gradient=20.0, lambda_ad=lam_ad)
+    like_cfg = CostConfig(lambda_census=15.0, lambda_gradient=20.0, lambda_ad=lam_ad,
+                          census_like=30)
+    plain = cost.cost_volume(left, right, cl, cr, gl, gr, n_disp=5, cfg=plain_cfg)
+    got = cost.cost_volume(left, right, cl, cr, gl, gr, n_disp=5, cfg=like_cfg)
+    mask = _like_reference(left, 4, 3, 30)
+    n_bits = 62
+    want = plain.copy()
+    for y in range(9):
+        for x in range(14):
+            like = bin(int(mask[y, x])).count("1")
+            for d in range(min(5, x + 1)):
+                differing = int(cl[y, x]) ^ int(cr[y, x - d])
+                counted = bin(differing & int(mask[y, x])).count("1")
+                hamming = bin(differing).count("1")
+                scaled = counted * n_bits / like if like else hamming
+                want[y, x, d] += (cost.rho(min(scaled, hamming), 15.0)
+                                  - cost.rho(hamming, 15.0))
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
+    assert np.any(got < plain - 1e-3)  # the dark half's like counts were the smaller
+    everyone = CostConfig(lambda_census=15.0, lambda_gradient=20.0, lambda_ad=lam_ad,
+                          census_like=255)
+    np.testing.assert_array_equal(
+        cost.cost_volume(left, right, cl, cr, gl, gr, n_disp=5, cfg=everyone), plain)

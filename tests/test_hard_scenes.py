@@ -62,7 +62,10 @@ def test_accurate_keeps_its_lead_under_small_changes_of_the_input(data_dir, data
     """A step fitted to the scenes as they are loses its gain when they change a little
     (Vintage's wall: 9.27 as it is, 15.6 with 3 columns cut; docs/results.md, "Small
     changes of the input"). On the standard scenes with sensor noise or a cut, each
-    config's mean is held, and accurate's stays below default's."""
+    config's mean is held, and accurate's stays below default's, but on Middlebury 2014
+    with noise: since default counts its census over the like neighbours too
+    (``cost.census_like``) it reads 7.69 there against accurate's 7.84 (seeds 1 and 2: 7.74
+    / 7.49, 7.78 / 7.98), which only the ceilings hold."""
     scenes = datasets.load_dataset(dataset, data_dir)
     changed = [SMALL_CHANGES[change](scene, index) for index, scene in enumerate(scenes)
                if scene.name not in HARD.get(dataset, [])]
@@ -72,7 +75,8 @@ def test_accurate_keeps_its_lead_under_small_changes_of_the_input(data_dir, data
              for name in configs}
     for name, mean in means.items():
         hold(f"perturbed/{KEYS[dataset]}/{name}/{change}", mean)
-    assert means["accurate"] < means["default"], means
+    if (dataset, change) != ("middlebury2014-quarter", "noise"):
+        assert means["accurate"] < means["default"], means
 
 
 @pytest.mark.data

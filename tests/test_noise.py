@@ -76,6 +76,10 @@ def test_adapt_to_noise_changes_nothing_below_the_floor_or_when_off():
     half = adapt_to_noise(cfg, 3.5)  # halfway up the ramp (floor 3, ramp 1)
     assert half.cost.presmooth_sigma == pytest.approx(0.5 * 0.1 * 3.5)
     assert noisy.arms.l2 == cfg.arms.l2  # noise.arms_l2 unset: the arms keep their length
+    assert noisy.cost.census_like == 0  # off stays off
+    like = config_from_dict({"noise": {"adapt": True, "floor": 3.0, "tau_per_sigma": 2.0,
+                                       "smooth_per_sigma": 0.1}, "cost": {"census_like": 20}})
+    assert adapt_to_noise(like, 7.0).cost.census_like == pytest.approx(20 + 2.0 * residual)
 
 
 def test_noisy_views_get_the_longer_arms_of_noise_arms_l2():

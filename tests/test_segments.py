@@ -122,3 +122,25 @@ def test_a_blank_wall_with_nothing_sure_inside_takes_its_edges_plane():
     one_edge[:3] = 0.05
     alone = _spread(view, disp, one_edge, long_arms=False, refit=False, bridge=0)
     assert np.mean(np.abs(alone.disparity[wall] - truth[wall]) <= 2.0) < 0.3
+
+
+def test_an_edge_plane_that_leaves_the_range_inside_the_wall_is_refused():
+    """The edge's sure pixels can lie on surfaces before the wall (delivery_area_1s: the
+    crates along the wall's foot). A plane through them that falls below disparity 0 (behind
+    infinity) inside the segment is no surface seen there: the wall keeps its own match."""
+    view = _wall_view()
+    height, width = view.shape
+    ys, xs = np.mgrid[0:height, 0:width]
+    for slope, refused in ((0.1, True), (0.02, False)):
+        tilted = (1 + slope * (ys - 60) + 0.001 * xs).astype(np.float32)  # 1 at row 60
+        disp = np.full(tilted.shape, 30.0, np.float32)  # the wall's own match
+        confidence = np.full(tilted.shape, 0.05, np.float32)
+        sure = np.zeros(tilted.shape, bool)
+        sure[200:] = True  # the skirting board ...
+        sure[60:200, 140:170] = True  # ... and the object: no sure pixel above row 60
+        disp[sure] = tilted[sure]
+        confidence[sure] = 0.95
+        out = _spread(view, disp, confidence, long_arms=False, refit=False, bridge=0)
+        top = (slice(0, 20), slice(20, 110))
+        # At slope 0.1 the plane reads -5 at the top row; at 0.02, -0.2: within inlier.
+        assert np.all(out.disparity[top] == 30.0) == refused

@@ -41,6 +41,13 @@ class CostConfig:
     census_band: float = _param(0.0, 0.0, 64.0, doc=(
         "A neighbour sets its census bit only when darker than the centre by more than this "
         "(grey levels)."))
+    # An edge in the window makes a pixel beside it match the surface across the edge (a
+    # wire drawn several times its width); counted over the neighbours like the centre, the
+    # census sees the pixel's own surface (docs/results.md, "A chain-link fence").
+    census_like: float = _param(0.0, 0.0, 255.0, doc=(
+        "Census distance also counted over the neighbours within this many grey levels of "
+        "the left pixel in every channel, scaled to the whole window; the smaller of the two "
+        "counts (0 is off)."))
     lambda_census: float = _param(30.0, 0.01, 1000.0, doc=(
         "Scale of the census term, 1 − exp(−c / λ): smaller saturates sooner."))
     lambda_gradient: float | None = _param(None, 0.01, 10000.0, nullable=True, doc=(

@@ -9,12 +9,12 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ._kernels.census import census_transform as _census_kernel
+from ._kernels.census import census_transform as _census_kernel, like_neighbours
 from ._kernels.cost import matching_cost_volume, view_terms
 from . import volumes
 from .bands import Bands
 from .config import CostConfig
-from .images import as_channels
+from .images import as_channels, channel_planes
 
 
 def census_transform(grey: np.ndarray, *, width: int = 9, height: int = 7,
@@ -42,6 +42,27 @@ def census_for(grey: np.ndarray, cfg: CostConfig) -> np.ndarray:
                             band=cfg.census_band)
 
 
+def like_masks(colour: np.ndarray, cfg: CostConfig) -> np.ndarray:
+    """Each pixel's census bits (uint64, (H, W), the census's order) of the neighbours whose
+    every channel lies within ``cost.census_like`` grey levels of the pixel's."""
+    half_w, half_h = cfg.census_width // 2, cfg.census_height // 2
+    planes = channel_planes(cv2.copyMakeBorder(as_channels(colour), half_h, half_h, half_w,
+                                               half_w, cv2.BORDER_REPLICATE))
+    out = np.empty((planes.shape[1] - 2 * half_h, planes.shape[2] - 2 * half_w), np.uint64)
+    like_neighbours(planes, half_w, half_h, np.int16(int(cfg.census_like)), out)
+    return out
+
+
+def like_table(cfg: CostConfig) -> np.ndarray:
+    """``table[n, m]``: the census term of m differing bits among n like neighbours, scaled
+    to the whole window (row 0, no like neighbour: 1, above every plain count's term)."""
+    n_bits = cfg.census_width * cfg.census_height - 1
+    like = np.arange(n_bits + 1, dtype=np.float64)[:, None]
+    counted = np.arange(n_bits + 1, dtype=np.float64)[None, :]
+    scaled = counted * n_bits / np.maximum(like, 1)
+    return np.where(like > 0, rho(scaled, cfg.lambda_census), 1.0).astype(np.float32)
+
+
 def rho(cost: np.ndarray | float, lam: float) -> np.ndarray | float:
     """Robust mapping into [0, 1): ``1 - exp(-cost / lam)``."""
     return 1.0 - np.exp(-np.asarray(cost, dtype=np.float64) / lam)
@@ -64,8 +85,9 @@ def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
                grad_l: np.ndarray, grad_r: np.ndarray, cfg: CostConfig,
                colour_weight: float = 1.0) -> tuple:
     """The arguments the cost kernels take after the output: each view's census, quantised
-    gradient and colour planes (C, H, W) (the right view's reversed along x), the three
-    lookup tables (an empty one switches its term off) and the maximum cost.
+    gradient and colour planes (C, H, W) (the right view's reversed along x), the left view's
+    like neighbours (:func:`like_masks`, with ``cost.census_like``), the four lookup tables
+    (an empty one switches its term off) and the maximum cost.
     ``colour_weight``: what the exposure correction leaves of the colour term (times
     ``cost.ad_weight``)."""
     n_bits = cfg.census_width * cfg.census_height - 1
@@ -93,8 +115,12 @@ def cost_terms(colour_l: np.ndarray, colour_r: np.ndarray,
     else:
         ad_table = (ad_weight * rho(np.arange(255 * channels + 1) / channels,
                                     cfg.lambda_ad)).astype(np.float32)
-    return (census_l, census_r_rev, q_l, q_r_rev, planes_l, planes_r_rev, census_table,
-            grad_table, ad_table, np.float32(max_cost(cfg, colour_weight)))
+    if cfg.census_like > 0:
+        like_l, like_by_count = like_masks(colour_l, cfg), like_table(cfg)
+    else:
+        like_l, like_by_count = np.empty((0, 0), np.uint64), np.empty((0, 0), np.float32)
+    return (census_l, census_r_rev, q_l, q_r_rev, planes_l, planes_r_rev, like_l, census_table,
+            like_by_count, grad_table, ad_table, np.float32(max_cost(cfg, colour_weight)))
 
 
 def cost_volume(colour_l: np.ndarray, colour_r: np.ndarray,

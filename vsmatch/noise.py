@@ -79,7 +79,8 @@ def adapt_to_noise(cfg: Config, sigma: float) -> Config:
     Gaussian of sigma ``gain * noise.smooth_per_sigma * sigma`` (added to
     ``cost.presmooth_sigma``). The noise left after that, ``residual`` (``sigma`` scaled by
     :func:`smoothed_noise_factor`), sets the rest: ``gain * noise.tau_per_sigma * residual``
-    grey levels are added to every colour threshold (arm tau1-3, scanline tau) and to the
+    grey levels are added to every colour threshold (arm tau1-3, scanline tau, the census's
+    like neighbours' ``cost.census_like`` where it is on) and to the
     colour-difference lambda, since noise spreads every colour difference by the same
     amount whatever the threshold; the census and gradient lambdas are multiplied by
     ``1 + gain * noise.lambda_per_sigma * residual``, and the census dead band grows by
@@ -103,6 +104,7 @@ def adapt_to_noise(cfg: Config, sigma: float) -> Config:
         lambda_gradient=None if c.lambda_gradient is None else c.lambda_gradient * grow_lambda,
         lambda_ad=None if c.lambda_ad is None else c.lambda_ad + widen,
         census_band=c.census_band + gain * n.band_per_sigma * residual,
+        census_like=c.census_like + widen if c.census_like > 0 else 0.0,
         presmooth_sigma=smooth)
     l2 = a.l2 if n.arms_l2 == 0 else int(round(a.l2 + gain * (n.arms_l2 - a.l2)))
     arms = dataclasses.replace(a, tau1=a.tau1 + widen, tau2=a.tau2 + widen,

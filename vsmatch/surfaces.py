@@ -154,17 +154,19 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
         out[settle] = plane[settle]
         confidence[agree] = np.maximum(confidence[agree], np.float32(s.refit_confidence))
     if s.segments:
-        _segment_planes(out, confidence, left, disp, sure, kept, s)
+        _segment_planes(out, confidence, left, disp, sure, kept, max_disp, s)
     return Spread(np.clip(out, 0, max_disp, out=out), confidence)
 
 
 def _segment_planes(out: np.ndarray, confidence: np.ndarray, left: np.ndarray,
-                    disp: np.ndarray, sure: np.ndarray, kept: np.ndarray,
+                    disp: np.ndarray, sure: np.ndarray, kept: np.ndarray, max_disp: int,
                     s: SurfacesConfig) -> None:
     """In place: each blank segment where the match found little sure takes its edge's
     plane (``vsmatch.segments``) where ``out`` lies more than ``s.segment_move`` off it,
     except at the ``kept`` pixels; a pixel so moved keeps a confidence of at most
-    ``s.bridge_confidence`` (a guess from the edge, out of the cloud)."""
+    ``s.bridge_confidence`` (a guess from the edge, out of the cloud). A plane that leaves
+    the range ``0 .. max_disp`` by more than ``s.inlier`` inside its segment is no surface
+    seen there: the segment stays as it is."""
     labels, large = blank_segments(left, s.levels, s.segment_delta, s.segment_area,
                                    s.segment_jump)
     for label in large:
@@ -181,6 +183,11 @@ def _segment_planes(out: np.ndarray, confidence: np.ndarray, left: np.ndarray,
                   + np.float32(plane.b) * np.arange(box[0].start, box[0].stop,
                                                     dtype=np.float32)[:, None]
                   + np.float32(plane.c))
+        inside = values[mask[box]]
+        if inside.min() < -s.inlier or inside.max() > max_disp + s.inlier:
+            # Behind infinity or nearer than the range: the edge's sure pixels lie on
+            # other surfaces too (delivery_area_1s: the crates before the wall's foot).
+            continue
         with np.errstate(invalid="ignore"):
             move = mask[box] & ~kept[box] & ~(np.abs(values - out[box]) <= s.segment_move)
         out[box][move] = values[move]

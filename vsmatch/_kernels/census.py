@@ -80,3 +80,36 @@ def popcount64(v):
     v = (v & np.uint64(0x3333333333333333)) + ((v >> np.uint64(2)) & np.uint64(0x3333333333333333))
     v = (v + (v >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
     return (v * np.uint64(0x0101010101010101)) >> np.uint64(56)
+
+
+@njit(**ROW_OPTIONS)
+def _like_of_row(padded, half_w, half_h, threshold, out, y):
+    """:func:`like_neighbours` of row ``y``."""
+    channels, width = padded.shape[0], out.shape[1]
+    window_w = 2 * half_w + 1
+    count = (2 * half_h + 1) * window_w
+    bits = np.zeros(width, dtype=np.uint64)
+    for k in range(count):
+        dy, dx = k // window_w, k % window_w
+        if dy == half_h and dx == half_w:
+            continue
+        for x in range(width):
+            like = np.uint64(1)
+            for c in range(channels):
+                if abs(padded[c, y + dy, x + dx] - padded[c, y + half_h, x + half_w]) > threshold:
+                    like = np.uint64(0)
+            bits[x] = (bits[x] << np.uint64(1)) | like
+    for x in range(width):
+        out[y, x] = bits[x]
+
+
+@njit(**KERNEL_OPTIONS)
+def like_neighbours(padded, half_w, half_h, threshold, out):
+    """One bit per window neighbour q in the census's order (row-major, centre skipped): set
+    where every channel of q lies within ``threshold`` grey levels of the centre's.
+
+    ``padded``: the view's channel planes (C, H + 2 half_h, W + 2 half_w), int16, with
+    repeated border pixels."""
+    height = out.shape[0]
+    for y in prange(height):
+        _like_of_row(padded, half_w, half_h, threshold, out, np.int64(y))

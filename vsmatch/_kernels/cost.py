@@ -18,7 +18,8 @@ def _candidates(lo, count, y, x, width):
 
 @njit(**ROW_OPTIONS)
 def _colour_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, colour_r_rev,
-                         census_table, grad_table, ad_table, max_cost, lo, count, y, out):
+                         like_l, census_table, like_table, grad_table, ad_table, max_cost, lo,
+                         count, y, out):
     """:func:`matching_cost_volume` of row ``y`` with the three channels' term. Its output
     overlaps no input, and the compiler is told so (as every body is, ``ROW_OPTIONS``): the
     loop over the candidates then vectorises without overlap checks (the 13 standard pairs'
@@ -27,6 +28,7 @@ def _colour_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
     candidates): they stay in the loop."""
     width, n_disp = out.shape[1], out.shape[2]
     use_grad = grad_table.shape[0] > 0
+    use_like = like_table.shape[0] > 0
     for x in range(width):
         if count[y, x] <= 0:  # no candidates (a held pixel): nothing to compute
             continue
@@ -42,24 +44,39 @@ def _colour_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
         r0 = colour_r_rev[0, y, start:]
         r1 = colour_r_rev[1, y, start:]
         r2 = colour_r_rev[2, y, start:]
-        for d in range(last):
-            c = census_table[popcount64(cl ^ census_r[d])]
-            if use_grad:
-                c += grad_table[abs(gl - grad_r[d])]
-            c += ad_table[abs(c0 - r0[d]) + abs(c1 - r1[d]) + abs(c2 - r2[d])]
-            costs[d] = c
+        if use_like:  # two loops, so that the plain one stays as it was
+            ml = like_l[y, x]
+            like_row = like_table[popcount64(ml)]
+            for d in range(last):
+                differing = cl ^ census_r[d]
+                c = min(census_table[popcount64(differing)],
+                        like_row[popcount64(differing & ml)])
+                if use_grad:
+                    c += grad_table[abs(gl - grad_r[d])]
+                c += ad_table[abs(c0 - r0[d]) + abs(c1 - r1[d]) + abs(c2 - r2[d])]
+                costs[d] = c
+        else:
+            for d in range(last):
+                c = census_table[popcount64(cl ^ census_r[d])]
+                if use_grad:
+                    c += grad_table[abs(gl - grad_r[d])]
+                c += ad_table[abs(c0 - r0[d]) + abs(c1 - r1[d]) + abs(c2 - r2[d])]
+                costs[d] = c
         for d in range(last, n_disp):
             costs[d] = max_cost
 
 
 @njit(**KERNEL_OPTIONS)
 def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, colour_r_rev,
-                         census_table, grad_table, ad_table, max_cost, lo, count, out):
+                         like_l, census_table, like_table, grad_table, ad_table, max_cost, lo,
+                         count, out):
     """C(p, d) = rho(Hamming) + rho(|G_L - G_R|) [+ rho(mean |I_L - I_R|)], layout (H, W, B):
     ``out[y, x, k]`` is the cost of disparity ``lo[y, x] + k`` for ``k < count[y, x]`` (the
     pixel's band; the whole range is ``lo`` 0 and ``count`` D), ``max_cost`` past it.
 
-    Every term is a table lookup: ``census_table[k]`` for k differing bits,
+    Every term is a table lookup: ``census_table[k]`` for k differing bits, or the smaller
+    of that and ``like_table[n, m]`` for the m of them among the n neighbours like the left
+    pixel (the bits of ``like_l[y, x]``; an empty ``like_table``: the census alone),
     ``grad_table[|g_L - g_R|]`` on gradients quantised to integers, ``ad_table[s]`` for the
     sum s of the channels' absolute differences. An empty table switches its term off.
     Where x - d < 0 the cost is ``max_cost``. The right view's arrays are reversed along x.
@@ -69,12 +86,13 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
     height, width, n_disp = out.shape
     use_grad = grad_table.shape[0] > 0
     use_ad = ad_table.shape[0] > 0
+    use_like = like_table.shape[0] > 0
     channels = colour_l.shape[0]
     for y in prange(height):
         if use_ad and channels == 3:  # `default`'s terms: a function of its own, below
             _colour_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l,
-                                 colour_r_rev, census_table, grad_table, ad_table, max_cost,
-                                 lo, count, np.int64(y), out)
+                                 colour_r_rev, like_l, census_table, like_table, grad_table,
+                                 ad_table, max_cost, lo, count, np.int64(y), out)
             continue
         for x in range(width):
             if count[y, x] <= 0:  # no candidates (a held pixel): nothing to compute
@@ -85,8 +103,16 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
             census_r = census_r_rev[y, start:]
             grad_r = grad_r_rev[y, start:]
             costs = out[y, x]
+            ml = np.uint64(0)
+            like_row = census_table
+            if use_like:
+                ml = like_l[y, x]
+                like_row = like_table[popcount64(ml)]
             for d in range(last):
-                c = census_table[popcount64(cl ^ census_r[d])]
+                differing = cl ^ census_r[d]
+                c = census_table[popcount64(differing)]
+                if use_like:
+                    c = min(c, like_row[popcount64(differing & ml)])
                 if use_grad:
                     c += grad_table[abs(gl - grad_r[d])]
                 if use_ad:
