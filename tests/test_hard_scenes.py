@@ -48,10 +48,14 @@ def test_accurate_gains_on_the_hard_scenes_and_loses_nothing_elsewhere(data_dir,
 
 
 #: Changes of the input too small to matter (scripts/perturbed.py): each view given sensor
-#: noise of 1 grey level (seeded by the scene's place in its set), or 3 columns cut.
+#: noise of 1 grey level (seeded by the scene's place in its set and the seed), or 3 columns
+#: cut. Noise in three seeds: one seed's lead between the configs moved by 0.3 from seed to
+#: seed on Middlebury 2014.
 SMALL_CHANGES = {
-    "noise": lambda scene, index: evaluation.with_sensor_noise(scene, index, 1.0),
-    "cut": lambda scene, index: evaluation.without_left_columns(scene, 3),
+    "noise": [lambda scene, index, seed=seed: evaluation.with_sensor_noise(scene, index, 1.0,
+                                                                           seed)
+              for seed in (0, 1, 2)],
+    "cut": [lambda scene, index: evaluation.without_left_columns(scene, 3)],
 }
 
 
@@ -60,23 +64,25 @@ SMALL_CHANGES = {
 @pytest.mark.parametrize("change", list(SMALL_CHANGES))
 def test_accurate_keeps_its_lead_under_small_changes_of_the_input(data_dir, dataset, change):
     """A step fitted to the scenes as they are loses its gain when they change a little
-    (Vintage's wall: 9.27 as it is, 15.6 with 3 columns cut; docs/results.md, "Small
-    changes of the input"). On the standard scenes with sensor noise or a cut, each
-    config's mean is held, and accurate's stays below default's, but on Middlebury 2014
-    with noise: since default counts its census over the like neighbours too
-    (``cost.census_like``) it reads 7.69 there against accurate's 7.84 (seeds 1 and 2: 7.74
-    / 7.49, 7.78 / 7.98), which only the ceilings hold."""
-    scenes = datasets.load_dataset(dataset, data_dir)
-    changed = [SMALL_CHANGES[change](scene, index) for index, scene in enumerate(scenes)
-               if scene.name not in HARD.get(dataset, [])]
+    (Vintage's wall: 9.95 as it is, 15.4 with 3 columns cut; docs/results.md, "Small
+    changes of the input"). On the standard scenes with sensor noise (the mean over three
+    seeds) or a cut, each config's mean is held, and accurate's stays below default's."""
+    # Each scene's place in the whole set seeds its noise, as in scripts/perturbed.py.
+    scenes = [(index, scene) for index, scene in enumerate(datasets.load_dataset(dataset,
+                                                                                  data_dir))
+              if scene.name not in HARD.get(dataset, [])]
     configs = {"default": "default", "accurate": "accurate"}
-    report = evaluation.evaluate(changed, configs, dataset=dataset)
-    means = {name: float(np.mean(list(evaluation.headline_figures(report, name).values())))
-             for name in configs}
-    for name, mean in means.items():
-        hold(f"perturbed/{KEYS[dataset]}/{name}/{change}", mean)
-    if (dataset, change) != ("middlebury2014-quarter", "noise"):
-        assert means["accurate"] < means["default"], means
+    means: dict[str, list[float]] = {name: [] for name in configs}
+    for make in SMALL_CHANGES[change]:
+        changed = [make(scene, index) for index, scene in scenes]
+        report = evaluation.evaluate(changed, configs, dataset=dataset)
+        for name in configs:
+            means[name].append(float(np.mean(list(
+                evaluation.headline_figures(report, name).values()))))
+    mean = {name: float(np.mean(values)) for name, values in means.items()}
+    for name, value in mean.items():
+        hold(f"perturbed/{KEYS[dataset]}/{name}/{change}", value)
+    assert mean["accurate"] < mean["default"], means
 
 
 @pytest.mark.data
