@@ -54,13 +54,17 @@ def like_masks(colour: np.ndarray, cfg: CostConfig) -> np.ndarray:
 
 
 def like_table(cfg: CostConfig) -> np.ndarray:
-    """``table[n, m]``: the census term of m differing bits among n like neighbours, scaled
-    to the whole window (row 0, no like neighbour: 1, above every plain count's term)."""
+    """``table[n]``: the census terms a pixel with n like neighbours looks up, in one row so
+    that a cell takes one look-up: ``table[n, m]`` for m differing bits among its like
+    neighbours (the term of m scaled to the whole window), ``table[n, N + 1 + h]`` for h
+    differing bits in all N of the window (row 0, no like neighbour: the plain terms only)."""
     n_bits = cfg.census_width * cfg.census_height - 1
     like = np.arange(n_bits + 1, dtype=np.float64)[:, None]
     counted = np.arange(n_bits + 1, dtype=np.float64)[None, :]
-    scaled = counted * n_bits / np.maximum(like, 1)
-    return np.where(like > 0, rho(scaled, cfg.lambda_census), 1.0).astype(np.float32)
+    scaled = np.broadcast_to(rho(counted * n_bits / np.maximum(like, 1), cfg.lambda_census),
+                             (n_bits + 1, n_bits + 1))
+    plain = np.broadcast_to(rho(counted, cfg.lambda_census), (n_bits + 1, n_bits + 1))
+    return np.ascontiguousarray(np.hstack([scaled, plain]), dtype=np.float32)
 
 
 def rho(cost: np.ndarray | float, lam: float) -> np.ndarray | float:

@@ -52,6 +52,16 @@ def _colour_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
             costs[d] = max_cost
 
 
+@njit(inline="always")
+def _smaller_count(differing, like_bits, like, n_bits):
+    """Where in a ``like_table`` row the smaller census term lies: m of the ``like``
+    neighbours differing scaled to the window (m * n_bits / like) against the h of all:
+    ``m`` where m * n_bits < h * like, else ``n_bits + 1 + h`` (the same term where equal)."""
+    h = np.int64(popcount64(differing))
+    m = np.int64(popcount64(differing & like_bits))
+    return m if m * n_bits < h * like else n_bits + 1 + h
+
+
 @njit(**ROW_OPTIONS)
 def _like_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, colour_r_rev,
                        like_l, census_table, like_table, grad_table, ad_table, max_cost, lo,
@@ -63,6 +73,7 @@ def _like_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, col
     use_grad = grad_table.shape[0] > 0
     use_ad = ad_table.shape[0] > 0
     channels = colour_l.shape[0]
+    n_bits = np.int64(census_table.shape[0] - 1)
     for x in range(width):
         if count[y, x] <= 0:  # no candidates (a held pixel): nothing to compute
             continue
@@ -70,7 +81,8 @@ def _like_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, col
         cl = census_l[y, x]
         gl = grad_l[y, x]
         ml = like_l[y, x]
-        like_row = like_table[popcount64(ml)]
+        like = np.int64(popcount64(ml))
+        terms = like_table[like]
         census_r = census_r_rev[y, start:]
         grad_r = grad_r_rev[y, start:]
         costs = out[y, x]
@@ -83,8 +95,7 @@ def _like_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, col
             r2 = colour_r_rev[2, y, start:]
             for d in range(last):
                 differing = cl ^ census_r[d]
-                c = min(census_table[popcount64(differing)],
-                        like_row[popcount64(differing & ml)])
+                c = terms[_smaller_count(differing, ml, like, n_bits)]
                 if use_grad:
                     c += grad_table[abs(gl - grad_r[d])]
                 c += ad_table[abs(c0 - r0[d]) + abs(c1 - r1[d]) + abs(c2 - r2[d])]
@@ -92,8 +103,7 @@ def _like_costs_of_row(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, col
         else:
             for d in range(last):
                 differing = cl ^ census_r[d]
-                c = min(census_table[popcount64(differing)],
-                        like_row[popcount64(differing & ml)])
+                c = terms[_smaller_count(differing, ml, like, n_bits)]
                 if use_grad:
                     c += grad_table[abs(gl - grad_r[d])]
                 if use_ad:
@@ -114,9 +124,10 @@ def matching_cost_volume(census_l, census_r_rev, grad_l, grad_r_rev, colour_l, c
     ``out[y, x, k]`` is the cost of disparity ``lo[y, x] + k`` for ``k < count[y, x]`` (the
     pixel's band; the whole range is ``lo`` 0 and ``count`` D), ``max_cost`` past it.
 
-    Every term is a table lookup: ``census_table[k]`` for k differing bits, or the smaller
-    of that and ``like_table[n, m]`` for the m of them among the n neighbours like the left
-    pixel (the bits of ``like_l[y, x]``; an empty ``like_table``: the census alone),
+    Every term is a table lookup: ``census_table[k]`` for k differing bits, or with the
+    neighbours like the left pixel (the bits of ``like_l[y, x]``) the smaller of that and
+    the term of the m of them among its n like ones, scaled (``cost.like_table``: an empty
+    one, the census alone),
     ``grad_table[|g_L - g_R|]`` on gradients quantised to integers, ``ad_table[s]`` for the
     sum s of the channels' absolute differences. An empty table switches its term off.
     Where x - d < 0 the cost is ``max_cost``. The right view's arrays are reversed along x.
