@@ -1,5 +1,7 @@
-"""A prototype, not in the method: the census counted only over the window's neighbours
-like the centre, run through another script (docs/results.md, "A chain-link fence").
+"""The prototype of ``cost.census_like`` (now in the method as ``--hamming least --colour``),
+kept to try its variants: the census counted only over the window's neighbours like the
+centre, run through another script (docs/results.md, "A chain-link fence"). The volume it
+changes is the plain census's (``cost.census_like`` set to 0 under it).
 
 A neighbour whose grey level differs from the centre's by more than ``--threshold`` is left
 out of the left pixel's Hamming distance, which is then scaled back to the whole window
@@ -13,7 +15,7 @@ them (``capped``).
 C grey levels on average. ``--min-like F``: no mask where fewer than F of the neighbours are
 like (a thin thing in the window, not an edge across it).
 Full-range cost volumes only (the band search's are as they are), in NumPy: slow, but the
-same volume otherwise (with ``--threshold 0`` the script's figures are the method's).
+same volume otherwise (with ``--threshold 0`` the figures are those of the plain census).
 
     python scripts/masked_census.py --threshold 40 scripts/datasets_table.py default
     python scripts/masked_census.py --threshold 40 scripts/thin_structures.py default \\
@@ -23,6 +25,7 @@ same volume otherwise (with ``--threshold 0`` the script's figures are the metho
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import runpy
 import sys
 from pathlib import Path
@@ -76,6 +79,7 @@ def masked_cost_volume(args: argparse.Namespace):
 
     def cost_volume(colour_l, colour_r, census_l, census_r, grad_l, grad_r, *, n_disp, cfg,
                     bands=None, colour_weight=1.0):
+        cfg = dataclasses.replace(cfg, census_like=0.0)  # the plain census's volume
         volume = method(colour_l, colour_r, census_l, census_r, grad_l, grad_r,
                         n_disp=n_disp, cfg=cfg, bands=bands, colour_weight=colour_weight)
         if args.threshold <= 0 or (bands is not None and not bands.is_full):
