@@ -38,17 +38,21 @@ def test_a_wide_cell_is_centred_on_the_neighbour_of_the_nearest_grey():
     assert np.all(lo[:, 4:6] == 16)
 
 
+def _drawn(pair, cfg):
+    """How ``cfg`` draws ``pair``'s wires: pixels within 1 of the wires' disparity as a
+    multiple of the wires' own, the wall pixels among them kept at the cloud's threshold,
+    and the share of the wire pixels drawn as wire."""
+    wire = pair.disparity == pair.disparity.max()
+    result = pipeline.run(pair.left, pair.right, max_disp=pair.max_disp, config=cfg)
+    as_wire = np.abs(result.disparity - pair.disparity.max()) <= 1
+    kept = result.confidence >= cfg.cloud.min_confidence
+    return as_wire.sum() / wire.sum(), (as_wire & ~wire & kept).sum(), as_wire[wire].mean()
+
+
 def test_fast_keeps_a_thin_wires_width_and_trusts_no_fattened_pixel():
     pair = wires_pair(3)
-    wire = pair.disparity == pair.disparity.max()
-    drawn = {}
-    for guide in ("15", "null"):
-        cfg = with_changes("fast", [f"bands.guide={guide}"])
-        result = pipeline.run(pair.left, pair.right, max_disp=pair.max_disp, config=cfg)
-        as_wire = np.abs(result.disparity - pair.disparity.max()) <= 1
-        fat = as_wire & ~wire
-        kept = result.confidence >= cfg.cloud.min_confidence
-        drawn[guide] = (as_wire.sum() / wire.sum(), (fat & kept).sum(), as_wire[wire].mean())
+    drawn = {guide: _drawn(pair, with_changes("fast", [f"bands.guide={guide}"]))
+             for guide in ("15", "null")}
     # Measured: 1.00x and no fattened pixel kept with the guide, 1.33x and 269 without
     # (580 before the level down's P2 was halved, `scanline.level_p2`; the full search's
     # census 9 x 7 before that: 1.15x and 79, 1.47x and 3059).
@@ -61,16 +65,11 @@ def test_fasts_full_search_census_keeps_a_5_px_wire_from_the_wall_beside_it():
     its census bits to the wall beside it. ``fast``'s full search takes 5 x 7, its bands
     (``bands.census_*``) 9 x 7."""
     pair = wires_pair(5)
-    wire = pair.disparity == pair.disparity.max()
     drawn = {}
     for width in (5, 9):
         cfg = with_changes("fast", [f"cost.census_width={width}"])
         assert (cfg.bands.census_width, cfg.bands.census_height) == (9, 7)
-        result = pipeline.run(pair.left, pair.right, max_disp=pair.max_disp, config=cfg)
-        as_wire = np.abs(result.disparity - pair.disparity.max()) <= 1
-        kept = result.confidence >= cfg.cloud.min_confidence
-        drawn[width] = (as_wire.sum() / wire.sum(), (as_wire & ~wire & kept).sum(),
-                        as_wire[wire].mean())
+        drawn[width] = _drawn(pair, cfg)
     # Measured: 1.21x with 34 wall pixels kept as wire at 5 x 7; 2.54x and 525 at 9 x 7
     # (1793 before the repeat test looked at rivals two and three periods away: wires every
     # 40 px repeat, and part of the wall drawn as wire now counts as such).
@@ -122,15 +121,8 @@ def test_defaults_census_over_like_neighbours_keeps_a_fence_from_the_wall_behind
     width and kept 9690 wall pixels as wire. Counted also over the neighbours like the pixel
     (``cost.census_like``), the smaller count wins where the wire is not the pixel's own."""
     pair = fence_pair(3, spacing=45)
-    wire = pair.disparity == pair.disparity.max()
-    drawn = {}
-    for like in (20, 0):
-        cfg = with_changes("default", [f"cost.census_like={like}"])
-        result = pipeline.run(pair.left, pair.right, max_disp=pair.max_disp, config=cfg)
-        as_wire = np.abs(result.disparity - pair.disparity.max()) <= 1
-        kept = result.confidence >= cfg.cloud.min_confidence
-        drawn[like] = (as_wire.sum() / wire.sum(), (as_wire & ~wire & kept).sum(),
-                       as_wire[wire].mean())
+    drawn = {like: _drawn(pair, with_changes("default", [f"cost.census_like={like}"]))
+             for like in (20, 0)}
     # Measured: 1.58x with 1002 wall pixels kept as wire, 2.85x and 9690 without.
     assert drawn[20][0] < 1.75 and drawn[20][1] < 2000 and drawn[20][2] > 0.98
     assert drawn[0][0] > 2.4 and drawn[0][1] > 6000
