@@ -5,8 +5,8 @@ middlebury2 and middlebury-third bad 1.0, Middlebury 2014 quarter bad 2.0 / bad 
 integer share, KITTI 2015 D1, ETH3D bad 1.0 / bad 0.5 (non-occluded, mean of the scenes),
 the mean confidence r; then the real pairs without ground truth: the share of SIFT matches
 on the rectified pair that the disparity misses by more than 2 px, and the share of the
-cloud (confidence >= 0.95) farther than 1.5 x the SIFT matches' 99th-percentile depth; and
-the desk's near top (its bottom rows' median disparity, about 125 px) matched without
+cloud (confidence >= the config's ``cloud.min_confidence``) farther than 1.5 x the SIFT
+matches' 99th-percentile depth; and the desk's near top (its bottom rows' median disparity, about 125 px) matched without
 its calibration.
 
     python scripts/real_scenes.py [--data-root DIR] [--only eth3d,kitti2015] default fast \\
