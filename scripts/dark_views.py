@@ -11,6 +11,13 @@ dataset, for each config.
 
     python scripts/dark_views.py CONFIG [CONFIG ...] [--gain 0.3] [--sigma 1.5] [--gamma 1]
         [--datasets eth3d middlebury2014-quarter] [--data-root DIR] [--set section.key=value]
+        [--per-scene] [--stretch C]
+
+``--per-scene`` prints each scene's figure as it is and darkened too. ``--stretch C``
+scales both views of each scene, as they are and darkened, by one gain so that the left
+view's contrast (its 90th less its 10th grey-level percentile) reaches C where it is lower,
+before the match: a prototype of thresholds that follow the light (docs/results.md, "What
+transfers, and what is still short").
 """
 
 from __future__ import annotations
@@ -22,6 +29,7 @@ import numpy as np
 
 from vsmatch import datasets, evaluation
 from vsmatch.config import with_changes
+from vsmatch.surfaces import view_contrast
 from vsmatch.synthetic import darkened
 
 
@@ -30,6 +38,20 @@ def dark_scene(scene: datasets.Scene, gain: float, sigma: float, seed: int,
     """``scene`` with both views darkened, each with its own noise (seeded by ``seed``)."""
     return dataclasses.replace(scene, left=darkened(scene.left, gain, sigma, 2 * seed, gamma),
                                right=darkened(scene.right, gain, sigma, 2 * seed + 1, gamma))
+
+
+def stretched(scene: datasets.Scene, contrast: float) -> datasets.Scene:
+    """``scene`` with both views scaled by one gain so that the left view's contrast
+    reaches ``contrast`` (as it is where it already does, or with ``contrast`` 0)."""
+    gain = contrast / max(view_contrast(scene.left), 1.0)
+    if gain <= 1.0:
+        return scene
+
+    def scaled(view: np.ndarray) -> np.ndarray:
+        return np.clip(np.rint(view.astype(np.float32) * np.float32(gain)), 0,
+                       255).astype(np.uint8)
+
+    return dataclasses.replace(scene, left=scaled(scene.left), right=scaled(scene.right))
 
 
 def main() -> None:
@@ -42,12 +64,15 @@ def main() -> None:
     parser.add_argument("--set", dest="changes", action="append", default=[],
                         metavar="section.key=value", help="applied to every config")
     parser.add_argument("--data-root", default=None)
+    parser.add_argument("--per-scene", action="store_true")
+    parser.add_argument("--stretch", type=float, default=0.0, metavar="C")
     args = parser.parse_args()
     methods = {name: with_changes(name, args.changes) for name in args.configs}
     for dataset in args.datasets:
         scenes = datasets.load_dataset(dataset, args.data_root)
-        dark = [dark_scene(s, args.gain, args.sigma, seed, args.gamma)
+        dark = [stretched(dark_scene(s, args.gain, args.sigma, seed, args.gamma), args.stretch)
                 for seed, s in enumerate(scenes)]
+        scenes = [stretched(s, args.stretch) for s in scenes]
         for name, cfg in methods.items():
             as_is = evaluation.headline_figures(
                 evaluation.evaluate(scenes, {name: cfg}, dataset=dataset), name)
@@ -56,6 +81,9 @@ def main() -> None:
             worst = max(low, key=low.get)
             print(f"{dataset} {name}: as is {np.mean(list(as_is.values())):.2f}, dark "
                   f"{np.mean(list(low.values())):.2f} (worst {worst} {low[worst]:.2f})")
+            if args.per_scene:
+                for scene, value in low.items():
+                    print(f"  {scene:20s} as is {as_is[scene]:6.2f}, dark {value:6.2f}")
 
 
 if __name__ == "__main__":

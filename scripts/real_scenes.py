@@ -6,8 +6,8 @@ integer share, KITTI 2015 D1, ETH3D bad 1.0 / bad 0.5 (non-occluded, mean of the
 the mean confidence r; then the real pairs without ground truth: the share of SIFT matches
 on the rectified pair that the disparity misses by more than 2 px, and the share of the
 cloud (confidence >= the config's ``cloud.min_confidence``) farther than 1.5 x the SIFT
-matches' 99th-percentile depth; and the desk's near top (its bottom rows' median disparity, about 125 px) matched without
-its calibration.
+matches' 99th-percentile depth; and the desk's near top (its bottom rows' median
+disparity, about 125 px) matched without its calibration.
 
     python scripts/real_scenes.py [--data-root DIR] [--only eth3d,kitti2015] default fast \\
         "default={cost: {lambda_ad: null}}"
