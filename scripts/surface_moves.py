@@ -6,8 +6,9 @@ then ``surfaces.spread_planes`` on it (the right view as matched: after the expo
 correction). Counted over the non-occluded pixels with ground truth, per dataset and kind
 of view: the share moved, and the pixels it fixes and breaks (right: within the dataset's
 headline threshold), by the pixel's texture in units of what the view's noise alone gives
-(the Sobel texture over 5.66 x the pair's estimated noise: 5.66 is the texture of noise
-of one grey level), and by how far inside the right view the match lay before (x - d).
+(the Sobel texture over 5.66 x the pair's estimated noise, 5.66 being the texture of noise
+of one grey level; over 1 where the noise reads below 1 / 5.66, as it reads 0 on many clean
+views), and by how far inside the right view the match lay before (x - d).
 
     python scripts/surface_moves.py [CONFIG] [--datasets eth3d middlebury2014-quarter]
         [--gain 0.3] [--sigma 1.5] [--data-root DIR]
