@@ -46,7 +46,7 @@ def moves(scene: datasets.Scene, cfg, threshold: float) -> dict[str, np.ndarray]
         right, _, _ = exposure.correct_exposure(scene.left, scene.right, scene.max_disp, cfg)
     spread = surfaces.spread_planes(result.disparity, result.confidence, result.labels,
                                     scene.left, right, scene.max_disp, result.config,
-                                    result.colour_weight)
+                                    result.colour_weight, result.curve["margin"])
     truth = np.nan_to_num(scene.ground_truth, posinf=0)
     known = scene.masks.get("nonocc", scene.masks["all"]) & (truth > 0)
     with np.errstate(invalid="ignore"):

@@ -71,6 +71,13 @@ MAX_DISTANCE = 16.0
 DENSITIES = np.arange(1, 21) / 20.0
 
 
+def neighbourhood_margin(margin: np.ndarray) -> np.ndarray:
+    """The mean of each pixel's cost-curve ``margin`` (a curve map, :func:`curve_features`)
+    over the :data:`GATE_WINDOW` square about it, float32: what the matchability gate judges
+    a neighbourhood by."""
+    return plane_blur(np.ascontiguousarray(margin[None], dtype=np.float32), GATE_WINDOW)[0]
+
+
 def cost_curves(volume: np.ndarray, winners: np.ndarray, bands: Bands | None = None
                 ) -> tuple[np.ndarray, ...]:
     """Each pixel's best cost, second minimum at least 2 away, and mean cost over its

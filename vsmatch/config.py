@@ -258,7 +258,9 @@ class SurfacesConfig:
     every pixel that was unsure takes its region's plane where the region spreads at most
     ``max_spread`` about it; its confidence is raised to ``refit_confidence`` where the plane
     lies within ``refit_agree`` of its own match or bridge. A pixel whose texture is below
-    ``flat`` counts as unsure; one in a ``shadow`` (and not flat) keeps its match. With
+    ``flat`` counts as unsure; one in a ``shadow`` (and not flat) keeps its match, and so does
+    one of a view of contrast below ``dark_contrast`` whose neighbourhood's cost curves have a
+    mean margin of ``dark_margin`` or more. With
     ``long_arms``, what the planes and bridges leave unsure, and what the refit leaves, take
     the plane of longer-armed regions (one threshold ``tau`` along the whole arm). With
     ``segments``, last, a blank segment of the view reduced ``levels`` times (cut where
@@ -289,6 +291,15 @@ class SurfacesConfig:
     shadow_window: int = _param(16, 1, 256, doc=(
         "The view's width over this is the side of the box a shadow's light is measured "
         "over."))
+    dark_contrast: float | None = _param(None, 1.0, 255.0, nullable=True, doc=(
+        "A view whose contrast (90th less 10th percentile of its grey levels) is below this "
+        "is dark all over: there a pixel whose neighbourhood's cost curves have a mean "
+        "margin of dark_margin or more keeps its own match, unless it is flat (the "
+        "matchability gate judges margins on one scale for every view, and reads a dark "
+        "view's matched texture as unmatched). null: off."))
+    dark_margin: float = _param(0.06, 0.0, 1.0, doc=(
+        "The mean cost-curve margin (over the matchability gate's window) from which a "
+        "pixel of a view dark all over counts as matched."))
     min_share: float = _param(0.05, 0.0, 1.0, doc=(
         "Share of a region's pixels that must be sure for a plane."))
     max_spread: float = _param(1.0, 0.0, 100.0, doc=(

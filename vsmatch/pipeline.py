@@ -97,7 +97,7 @@ def _search_whole_range(left: np.ndarray, right: np.ndarray, max_disp: int,
         with timed(result.seconds, "surfaces"):
             result.disparity, result.confidence = surfaces.spread_planes(
                 result.disparity, result.confidence, result.labels, left, right, max_disp,
-                result.config, result.colour_weight)
+                result.config, result.colour_weight, result.curve["margin"])
     # 7. A pixel just before a step back may belong to the surface behind it: aggregation
     #    spills a surface's disparity a few pixels past its edge.
     if cfg.edges.enabled:

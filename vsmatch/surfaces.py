@@ -33,7 +33,10 @@ off it: a white wall wider than every region, sure nowhere but along its skirtin
 None of these steps replaces a pixel in a shadow (``shadow``: the view's light around it
 well below the view's median) that has texture: a dark object there is matched mostly
 right, but its shallow cost curves read unsure, and a wide region grown across its faint
-texture would carry the background's plane over it.
+texture would carry the background's plane over it. A view dark all over (its contrast
+below ``dark_contrast``) has no shadow by that rule; there a pixel whose neighbourhood's
+cost curves show a margin (``dark_margin``) was matched, though the matchability gate put
+its confidence near 0, and keeps its match.
 """
 
 from __future__ import annotations
@@ -48,6 +51,7 @@ import numpy as np
 from ._kernels.bridges import bridges_along
 from .aggregation import arms_grown_below
 from .bands import Bands
+from .confidence import neighbourhood_margin
 from .config import ArmsConfig, Config, SurfacesConfig
 from .disparity import VALID
 from .images import grey_levels
@@ -69,12 +73,13 @@ class Spread(NamedTuple):
 
 def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
                   left: np.ndarray, right: np.ndarray, max_disp: int, cfg: Config,
-                  colour_weight: float = 1.0) -> Spread:
+                  colour_weight: float = 1.0, margin: np.ndarray | None = None) -> Spread:
     """``disp`` with the unsure pixels' values (and, with ``surfaces.flat``, those without
     texture) replaced by their wide region's plane where it holds, then bridged, then given
     the long-armed regions' plane, then refitted (float32, new arrays). ``right``: the view
     as matched (after any exposure correction), ``colour_weight`` the colour term's weight
-    it was matched with."""
+    it was matched with, ``margin`` the match's cost-curve margins (the result's
+    ``curve["margin"]``; None: ``surfaces.dark_contrast`` has nothing to judge by)."""
     s = cfg.surfaces
     grey = grey_levels(left)  # the view's contrast, texture and shadows read it
     contrast = view_contrast(grey)
@@ -93,6 +98,10 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     # curves are shallow, so its confidence reads low, though the match is mostly right.
     kept = (in_shadow(grey, s.levels, s.shadow, s.shadow_window) & ~flat
             if s.shadow is not None else np.zeros(disp.shape, bool))
+    # A view dark all over has no shadow; there a pixel whose cost curves show a margin was
+    # matched, though the matchability gate (one scale for every view) read it as unmatched.
+    if s.dark_contrast is not None and margin is not None and contrast < s.dark_contrast:
+        kept |= (neighbourhood_margin(margin) >= s.dark_margin) & ~flat
     was_unsure = ((confidence < _shrunk(s.take, contrast, s.take_contrast)) | flat) & ~kept
     plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier, was_unsure)
     take = close & was_unsure
