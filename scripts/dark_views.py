@@ -11,9 +11,11 @@ dataset, for each config.
 
     python scripts/dark_views.py CONFIG [CONFIG ...] [--gain 0.3] [--sigma 1.5] [--gamma 1]
         [--datasets eth3d middlebury2014-quarter] [--data-root DIR] [--set section.key=value]
-        [--per-scene] [--stretch C]
+        [--per-scene] [--stretch C] [--lit-quarter]
 
-``--per-scene`` prints each scene's figure as it is and darkened too. ``--stretch C``
+``--per-scene`` prints each scene's figure as it is and darkened too. ``--lit-quarter``
+keeps the light of each view's top-right quarter (a lamp or a window in a dark room: the
+view's contrast stays high, as a real dark scene's with a bright part does). ``--stretch C``
 scales both views of each scene, as they are and darkened, by one gain so that the left
 view's contrast (its 90th less its 10th grey-level percentile) reaches C where it is lower,
 before the match: a prototype of thresholds that follow the light (docs/results.md, "What
@@ -36,10 +38,19 @@ from datasets_table import HARD, halves
 
 
 def dark_scene(scene: datasets.Scene, gain: float, sigma: float, seed: int,
-               gamma: float = 1.0) -> datasets.Scene:
-    """``scene`` with both views darkened, each with its own noise (seeded by ``seed``)."""
-    return dataclasses.replace(scene, left=darkened(scene.left, gain, sigma, 2 * seed, gamma),
-                               right=darkened(scene.right, gain, sigma, 2 * seed + 1, gamma))
+               gamma: float = 1.0, lit_quarter: bool = False) -> datasets.Scene:
+    """``scene`` with both views darkened, each with its own noise (seeded by ``seed``);
+    with ``lit_quarter``, the top-right quarter of each view keeps its light (the same
+    noise)."""
+    views = []
+    for view, view_seed in ((scene.left, 2 * seed), (scene.right, 2 * seed + 1)):
+        dark = darkened(view, gain, sigma, view_seed, gamma)
+        if lit_quarter:
+            height, width = view.shape[:2]
+            lit = darkened(view, 1.0, sigma, view_seed)  # the same noise, the light kept
+            dark[:height // 2, width // 2:] = lit[:height // 2, width // 2:]
+        views.append(dark)
+    return dataclasses.replace(scene, left=views[0], right=views[1])
 
 
 def stretched(scene: datasets.Scene, contrast: float) -> datasets.Scene:
@@ -68,11 +79,13 @@ def main() -> None:
     parser.add_argument("--data-root", default=None)
     parser.add_argument("--per-scene", action="store_true")
     parser.add_argument("--stretch", type=float, default=0.0, metavar="C")
+    parser.add_argument("--lit-quarter", action="store_true")
     args = parser.parse_args()
     methods = {name: with_changes(name, args.changes) for name in args.configs}
     for dataset in args.datasets:
         scenes = datasets.load_dataset(dataset, args.data_root)
-        dark = [stretched(dark_scene(s, args.gain, args.sigma, seed, args.gamma), args.stretch)
+        dark = [stretched(dark_scene(s, args.gain, args.sigma, seed, args.gamma,
+                                     args.lit_quarter), args.stretch)
                 for seed, s in enumerate(scenes)]
         scenes = [stretched(s, args.stretch) for s in scenes]
         for name, cfg in methods.items():
