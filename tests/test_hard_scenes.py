@@ -101,13 +101,13 @@ def test_accurate_keeps_a_dark_objects_match_in_a_shadow(data_dir):
 
 
 @pytest.mark.data
-def test_accurate_keeps_the_matches_of_a_view_dark_all_over(data_dir):
+def test_accurate_keeps_the_matches_of_a_dark_scene(data_dir):
     """ETH3D's playground_1s darkened all over (gain 0.3, sensor noise 1.5 in each view;
     vsmatch.synthetic.darkened with the seeds scripts/dark_views.py gives it, 12 and 13):
     the matchability gate puts a third of its pixels near confidence 0, most of them right,
-    and accurate's surfaces replaced them (bad 1.0 9.99, against default's 3.99). In a view
-    of contrast below surfaces.dark_contrast, a pixel whose cost curves show a margin keeps
-    its match: held."""
+    and accurate's surfaces replaced them (bad 1.0 9.99, against default's 3.99). In the dark
+    of a dark scene (surfaces.dark_level, dark_share), a pixel whose cost curves show a
+    margin keeps its match: held."""
     scene = datasets.load_dataset("eth3d", data_dir, names=["playground_1s"])[0]
     left = synthetic.darkened(scene.left, 0.3, 1.5, 12)
     right = synthetic.darkened(scene.right, 0.3, 1.5, 13)

@@ -34,7 +34,7 @@ def _config(**changes):
     # unless a test says otherwise.
     changes.setdefault("contrast", None)
     changes.setdefault("take_contrast", None)
-    changes.setdefault("dark_contrast", None)
+    changes.setdefault("dark_level", None)
     cfg = load_config("accurate")
     return dataclasses.replace(cfg, surfaces=dataclasses.replace(cfg.surfaces, **changes))
 
@@ -393,12 +393,13 @@ def test_the_shadows_median_level_is_numpys_median(rng):
     assert _median_level(np.array([[10, 13]], np.uint8)) == 11.5
 
 
-def test_a_view_dark_all_over_keeps_the_pixels_its_cost_curves_matched(pair):
-    """The gate puts a dark view's matched texture near confidence 0; in a view whose
-    contrast is below dark_contrast (the synthetic pair's is 71), a pixel whose
-    neighbourhood's mean cost-curve margin is at least dark_margin keeps its match. A
-    brighter view's (dark_contrast below 71), a flat margin, or no margins at all: the
-    block takes its plane as any unsure block."""
+def test_a_dark_scene_keeps_the_pixels_its_cost_curves_matched(pair):
+    """The gate puts a dark scene's matched texture near confidence 0; where more than
+    dark_share of the view lies in the dark (light below dark_level: every box of the
+    synthetic pair's is below 256, none below 1), a pixel in the dark whose neighbourhood's
+    mean cost-curve margin is at least dark_margin keeps its match. No dark (the level 1),
+    too small a dark share (1.0), a flat margin or no margins at all: the block takes its
+    plane as any unsure block."""
     disp, confidence, labels = _inputs(pair)
     disp[BLOCK] = 2.0
     confidence[BLOCK] = 0.0
@@ -406,13 +407,14 @@ def test_a_view_dark_all_over_keeps_the_pixels_its_cost_curves_matched(pair):
     margin[BLOCK] = 1.0  # the mean over the gate's 15 x 15 window: >= 0.5 inside the block
     changes = dict(dark_margin=0.06, bridge=0, refit=False, long_arms=False, segments=False)
 
-    def spread(dark_contrast, margins):
+    def spread(level, share, margins):
         return spread_planes(disp, confidence, labels, pair.left, pair.right, pair.max_disp,
-                             _config(dark_contrast=dark_contrast, **changes),
+                             _config(dark_level=level, dark_share=share, **changes),
                              margin=margins).disparity
 
-    assert np.array_equal(spread(80.0, margin)[BLOCK], disp[BLOCK])
-    for dark_contrast, margins in ((None, margin), (60.0, margin), (80.0, margin * 0.0),
-                                   (80.0, None)):
-        taken = spread(dark_contrast, margins)
+    assert np.array_equal(spread(255.0, 0.5, margin)[BLOCK], disp[BLOCK])
+    for level, share, margins in ((None, 0.5, margin), (1.0, 0.5, margin),
+                                  (255.0, 1.0, margin), (255.0, 0.5, margin * 0.0),
+                                  (255.0, 0.5, None)):
+        taken = spread(level, share, margins)
         assert np.mean(np.abs(taken[BLOCK] - pair.disparity[BLOCK]) <= 1.0) > 0.95

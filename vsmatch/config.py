@@ -259,8 +259,8 @@ class SurfacesConfig:
     ``max_spread`` about it; its confidence is raised to ``refit_confidence`` where the plane
     lies within ``refit_agree`` of its own match or bridge. A pixel whose texture is below
     ``flat`` counts as unsure; one in a ``shadow`` (and not flat) keeps its match, and so does
-    one of a view of contrast below ``dark_contrast`` whose neighbourhood's cost curves have a
-    mean margin of ``dark_margin`` or more. With
+    one in the dark (light below ``dark_level``) of a view more than ``dark_share`` of which is,
+    whose neighbourhood's cost curves have a mean margin of ``dark_margin`` or more. With
     ``long_arms``, what the planes and bridges leave unsure, and what the refit leaves, take
     the plane of longer-armed regions (one threshold ``tau`` along the whole arm). With
     ``segments``, last, a blank segment of the view reduced ``levels`` times (cut where
@@ -291,15 +291,18 @@ class SurfacesConfig:
     shadow_window: int = _param(16, 1, 256, doc=(
         "The view's width over this is the side of the box a shadow's light is measured "
         "over."))
-    dark_contrast: float | None = _param(None, 1.0, 255.0, nullable=True, doc=(
-        "A view whose contrast (90th less 10th percentile of its grey levels) is below this "
-        "is dark all over: there a pixel whose neighbourhood's cost curves have a mean "
-        "margin of dark_margin or more keeps its own match, unless it is flat (the "
-        "matchability gate judges margins on one scale for every view, and reads a dark "
-        "view's matched texture as unmatched). null: off."))
+    dark_level: float | None = _param(None, 1.0, 255.0, nullable=True, doc=(
+        "A pixel whose neighbourhood's mean grey level (measured as for a shadow) is below "
+        "this is in the dark; where more than dark_share of the view is (a dark scene, "
+        "whose median is dark too: no shadow), a pixel in the dark whose neighbourhood's "
+        "cost curves have a mean margin of dark_margin or more keeps its own match, unless "
+        "it is flat (the matchability gate judges margins on one scale for every view, and "
+        "reads a dark scene's matched texture as unmatched). null: off."))
+    dark_share: float = _param(0.5, 0.0, 1.0, doc=(
+        "Share of the view in the dark above which it is a dark scene."))
     dark_margin: float = _param(0.06, 0.0, 1.0, doc=(
         "The mean cost-curve margin (over the matchability gate's window) from which a "
-        "pixel of a view dark all over counts as matched."))
+        "pixel in the dark of a dark scene counts as matched."))
     min_share: float = _param(0.05, 0.0, 1.0, doc=(
         "Share of a region's pixels that must be sure for a plane."))
     max_spread: float = _param(1.0, 0.0, 100.0, doc=(

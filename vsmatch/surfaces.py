@@ -33,10 +33,11 @@ off it: a white wall wider than every region, sure nowhere but along its skirtin
 None of these steps replaces a pixel in a shadow (``shadow``: the view's light around it
 well below the view's median) that has texture: a dark object there is matched mostly
 right, but its shallow cost curves read unsure, and a wide region grown across its faint
-texture would carry the background's plane over it. A view dark all over (its contrast
-below ``dark_contrast``) has no shadow by that rule; there a pixel whose neighbourhood's
-cost curves show a margin (``dark_margin``) was matched, though the matchability gate put
-its confidence near 0, and keeps its match.
+texture would carry the background's plane over it. A dark scene (more than
+``dark_share`` of the view where the light, measured as for a shadow, is below
+``dark_level``) has no shadow by that rule, its median being dark too; there a pixel in the
+dark whose neighbourhood's cost curves show a margin (``dark_margin``) was matched, though
+the matchability gate put its confidence near 0, and keeps its match.
 """
 
 from __future__ import annotations
@@ -79,7 +80,7 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     the long-armed regions' plane, then refitted (float32, new arrays). ``right``: the view
     as matched (after any exposure correction), ``colour_weight`` the colour term's weight
     it was matched with, ``margin`` the match's cost-curve margins (the result's
-    ``curve["margin"]``; None: ``surfaces.dark_contrast`` has nothing to judge by)."""
+    ``curve["margin"]``; None: ``surfaces.dark_level`` has nothing to judge by)."""
     s = cfg.surfaces
     grey = grey_levels(left)  # the view's contrast, texture and shadows read it
     contrast = view_contrast(grey)
@@ -98,10 +99,13 @@ def spread_planes(disp: np.ndarray, confidence: np.ndarray, labels: np.ndarray,
     # curves are shallow, so its confidence reads low, though the match is mostly right.
     kept = (in_shadow(grey, s.levels, s.shadow, s.shadow_window) & ~flat
             if s.shadow is not None else np.zeros(disp.shape, bool))
-    # A view dark all over has no shadow; there a pixel whose cost curves show a margin was
-    # matched, though the matchability gate (one scale for every view) read it as unmatched.
-    if s.dark_contrast is not None and margin is not None and contrast < s.dark_contrast:
-        kept |= (neighbourhood_margin(margin) >= s.dark_margin) & ~flat
+    # A dark scene (most of the view in the dark) has no shadow, its median being dark too;
+    # there a pixel in the dark whose cost curves show a margin was matched, though the
+    # matchability gate (one scale for every view) read it as unmatched.
+    if s.dark_level is not None and margin is not None:
+        dark = in_the_dark(grey, s.levels, s.shadow_window, s.dark_level)
+        if np.mean(dark) > s.dark_share:
+            kept |= dark & (neighbourhood_margin(margin) >= s.dark_margin) & ~flat
     was_unsure = ((confidence < _shrunk(s.take, contrast, s.take_contrast)) | flat) & ~kept
     plane, close = _close_planes(disp, sure, arms, s, s.min_share, s.inlier, was_unsure)
     take = close & was_unsure
@@ -287,12 +291,9 @@ def in_shadow(view: np.ndarray, levels: int, share: float, window: int) -> np.nd
     view dark all over has no shadow: its median is dark too."""
     grey = grey_levels(view)
     median = max(1.0, _median_level(grey))
-    reduced = grey.astype(np.float32)
-    for _ in range(levels):
-        reduced = cv2.pyrDown(reduced)
-    side = max(3, reduced.shape[1] // window) | 1
+    reduced, boxes, side = _box_light(grey, levels, window)
     level = np.float32(share * median)
-    dimmed = cv2.blur(reduced, (side, side), borderType=cv2.BORDER_REFLECT) / level
+    dimmed = boxes / level
     # The box reaches half its side into a shadow from the light around it: within that
     # reach of a shadow, a cell dark with its neighbours (3 x 3 cells) is in it too.
     near = cv2.dilate((dimmed < 1.0).astype(np.uint8), np.ones((side, side), np.uint8))
@@ -302,6 +303,25 @@ def in_shadow(view: np.ndarray, levels: int, share: float, window: int) -> np.nd
     # half a cell further out than a comparison on the cells would.
     dimmed = np.minimum(dimmed, np.float32(1.0))
     return cv2.resize(dimmed, view.shape[1::-1], interpolation=cv2.INTER_LINEAR) < 1.0
+
+
+def in_the_dark(view: np.ndarray, levels: int, window: int, level: float) -> np.ndarray:
+    """Where ``view``'s mean grey level over a box of 1/``window`` of its width (on the view
+    reduced ``levels`` times, as :func:`in_shadow` measures it) is below ``level`` grey
+    levels, at full size."""
+    _, boxes, _ = _box_light(grey_levels(view), levels, window)
+    return cv2.resize(boxes, view.shape[1::-1], interpolation=cv2.INTER_LINEAR) < level
+
+
+def _box_light(grey: np.ndarray, levels: int, window: int
+               ) -> tuple[np.ndarray, np.ndarray, int]:
+    """A uint8 view reduced ``levels`` times (float32), its mean grey level over a box of
+    1/``window`` of its width about each cell, and the box's side (cells)."""
+    reduced = grey.astype(np.float32)
+    for _ in range(levels):
+        reduced = cv2.pyrDown(reduced)
+    side = max(3, reduced.shape[1] // window) | 1
+    return reduced, cv2.blur(reduced, (side, side), borderType=cv2.BORDER_REFLECT), side
 
 
 def _median_level(grey: np.ndarray) -> float:
