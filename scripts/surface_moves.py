@@ -4,8 +4,9 @@ For each scene of each dataset, as it is and darkened (``scripts/dark_views.py``
 ``--gain``, ``--sigma``), the config's match without its surfaces and depth edges steps,
 then ``surfaces.spread_planes`` on it (the right view as matched: after the exposure
 correction). Counted over the non-occluded pixels with ground truth, per dataset and kind
-of view: the share moved, and the pixels it fixes and breaks (right: within the dataset's
-headline threshold), by the pixel's texture in units of what the view's noise alone gives
+of view: the share moved, and the pixels it fixes and breaks (wrong: by the dataset's
+headline measure, as ``vsmatch eval`` scores it), by the pixel's texture in units of what
+the view's noise alone gives
 (the Sobel texture over 5.66 x the pair's estimated noise, 5.66 being the texture of noise
 of one grey level; over 1 where the noise reads below 1 / 5.66, as it reads 0 on many clean
 views), and by how far inside the right view the match lay before (x - d).
@@ -22,7 +23,7 @@ import dataclasses
 import numpy as np
 
 from dark_views import dark_scene
-from vsmatch import datasets, exposure, pipeline, surfaces
+from vsmatch import datasets, evaluation, photometric, pipeline, surfaces
 from vsmatch.config import with_changes
 from vsmatch.images import grey_levels
 from vsmatch.noise import estimate_pair_noise
@@ -34,27 +35,27 @@ TEXTURE_BINS = (0, 2, 4, 8, 16, np.inf)
 INSIDE_BINS = (-np.inf, 0, 8, 16, 32, 64, np.inf)
 
 
-def moves(scene: datasets.Scene, cfg, threshold: float) -> dict[str, np.ndarray]:
-    """Per pixel of ``scene`` (non-occluded, with ground truth): moved, fixed, broken,
-    texture in noise units, and how far inside the right view the match lay."""
+def moves(scene: datasets.Scene, cfg, scoring: evaluation.Scoring) -> dict[str, np.ndarray]:
+    """Per pixel of ``scene`` (non-occluded, with ground truth): moved, fixed and broken
+    (wrong by ``scoring``), texture in noise units, and how far inside the right view the
+    match lay."""
     before_cfg = dataclasses.replace(
         cfg, surfaces=dataclasses.replace(cfg.surfaces, enabled=False),
         edges=dataclasses.replace(cfg.edges, enabled=False))
     result = pipeline.run(scene.left, scene.right, max_disp=scene.max_disp, config=before_cfg)
-    right = scene.right
-    if cfg.photometric.enabled:
-        right, _, _ = exposure.correct_exposure(scene.left, scene.right, scene.max_disp, cfg)
+    # The right view as matched: the match's own exposure map, not a second first match.
+    right = (scene.right if result.photometric is None
+             else photometric.apply(scene.right, result.photometric))
     spread = surfaces.spread_planes(result.disparity, result.confidence, result.labels,
                                     scene.left, right, scene.max_disp, result.config,
                                     result.colour_weight, result.curve["margin"])
-    truth = np.nan_to_num(scene.ground_truth, posinf=0)
-    known = scene.masks.get("nonocc", scene.masks["all"]) & (truth > 0)
+    known = evaluation.headline_mask(scene) & np.isfinite(scene.ground_truth)
+    wrong_before = scoring.bad_map(result.disparity, scene.ground_truth)
+    wrong_after = scoring.bad_map(spread.disparity, scene.ground_truth)
     with np.errstate(invalid="ignore"):
-        wrong_before = ~(np.abs(result.disparity - truth) <= threshold)
-        wrong_after = ~(np.abs(spread.disparity - truth) <= threshold)
         moved = ~(np.abs(spread.disparity - result.disparity) <= 0.5)
     noise = max(estimate_pair_noise(scene.left, scene.right), 1.0 / NOISE_TEXTURE)
-    inside = (np.arange(truth.shape[1], dtype=np.float32)[None, :]
+    inside = (np.arange(known.shape[1], dtype=np.float32)[None, :]
               - np.nan_to_num(result.disparity, nan=0, posinf=0, neginf=0))
     return {"moved": moved[known], "fixed": (wrong_before & ~wrong_after)[known],
             "broken": (wrong_after & ~wrong_before)[known],
@@ -83,12 +84,11 @@ def main() -> None:
     args = parser.parse_args()
     cfg = with_changes(args.config, [])
     for dataset in args.datasets:
-        threshold = 3.0 if dataset.startswith("kitti") else (
-            2.0 if dataset.startswith("middlebury2014") else 1.0)
+        scoring = evaluation.scoring_for(dataset)
         scenes = datasets.load_dataset(dataset, args.data_root)
         for kind in ("as is", "darkened"):
             parts = [moves(s if kind == "as is" else
-                           dark_scene(s, args.gain, args.sigma, seed), cfg, threshold)
+                           dark_scene(s, args.gain, args.sigma, seed), cfg, scoring)
                      for seed, s in enumerate(scenes)]
             joined = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
             fixed, broken = joined["fixed"], joined["broken"]
